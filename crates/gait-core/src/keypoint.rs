@@ -1,0 +1,60 @@
+//! Keypoints and the canonical keypoint naming shared by all pose models.
+
+use serde::{Deserialize, Serialize};
+
+/// The canonical keypoint names, in output order. Every pose estimator maps
+/// its native keypoints onto these (missing ones stay empty) and may append
+/// its extra native keypoints after them.
+pub const CANONICAL: [&str; 15] = [
+    "nose",
+    "neck",
+    "left_shoulder",
+    "right_shoulder",
+    "mid_hip",
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_ankle",
+    "right_ankle",
+    "left_heel",
+    "right_heel",
+    "left_toe",
+    "right_toe",
+];
+
+/// A 2-D keypoint in pixel coordinates (x right, y down, the centre of pixel
+/// (i, j) at (i, j)) with the model's likelihood in [0, 1].
+///
+/// A keypoint that was not found has NaN coordinates and likelihood 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Keypoint {
+    pub x: f64,
+    pub y: f64,
+    pub likelihood: f64,
+}
+
+impl Keypoint {
+    pub fn new(x: f64, y: f64, likelihood: f64) -> Self {
+        Self { x, y, likelihood }
+    }
+
+    /// The keypoint of a part that was not found.
+    pub fn missing() -> Self {
+        Self {
+            x: f64::NAN,
+            y: f64::NAN,
+            likelihood: 0.0,
+        }
+    }
+
+    /// True when the coordinates are finite.
+    pub fn is_found(&self) -> bool {
+        self.x.is_finite() && self.y.is_finite()
+    }
+}
+
+/// Position of `name` in [`CANONICAL`].
+pub fn canonical_index(name: &str) -> Option<usize> {
+    CANONICAL.iter().position(|n| *n == name)
+}

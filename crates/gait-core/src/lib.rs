@@ -1,0 +1,23 @@
+//! Shared types and stage traits of the `gait` toolkit.
+//!
+//! Data flows one way through the stages defined here:
+//! [`Frame`]s -> [`EdgeMap`]s -> regenerated [`Frame`]s -> [`Pose`]s -> [`PoseSequence`].
+//! Stage crates implement [`EdgeDetector`], [`ImageRegenerator`] and [`PoseEstimator`];
+//! they never depend on each other, only on this crate.
+
+pub mod dlc;
+mod edge;
+mod error;
+mod frame;
+pub mod geometry;
+pub mod keypoint;
+mod pose;
+mod stage;
+
+pub use edge::EdgeMap;
+pub use error::StageError;
+pub use frame::Frame;
+pub use geometry::Resize;
+pub use keypoint::{CANONICAL, Keypoint};
+pub use pose::{Pose, PoseSequence};
+pub use stage::{EdgeDetector, ImageRegenerator, PoseEstimator};

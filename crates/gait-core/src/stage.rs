@@ -1,0 +1,38 @@
+//! The three pluggable stage traits. All are batch-capable: the runner hands
+//! each stage a slice of consecutive frames (of the configured batch size) in
+//! input order, so stateful stages (e.g. pose trackers) see frames in order.
+
+use crate::{EdgeMap, Frame, Pose, StageError};
+
+/// Turns frames into edge maps (the ControlNet condition).
+pub trait EdgeDetector: Send {
+    /// Returns one edge map per frame, in order.
+    fn detect(&mut self, frames: &[Frame]) -> Result<Vec<EdgeMap>, StageError>;
+}
+
+/// Redraws frames, optionally conditioned on their edge maps.
+///
+/// `edges` is `None` when the pipeline has no edge stage (`kind = "none"`);
+/// otherwise it has one map per frame. Output frames keep the input frames'
+/// indices and sizes, so keypoints found on them are in original pixels.
+pub trait ImageRegenerator: Send {
+    fn regenerate(
+        &mut self,
+        frames: &[Frame],
+        edges: Option<&[EdgeMap]>,
+    ) -> Result<Vec<Frame>, StageError>;
+}
+
+/// Finds one person's keypoints per frame.
+pub trait PoseEstimator: Send {
+    /// Keypoint names of every returned pose: the canonical names first
+    /// (see [`crate::CANONICAL`]), then the model's extra native keypoints.
+    fn keypoint_names(&self) -> Vec<String>;
+
+    /// Returns one pose per frame, in the frame's own pixel coordinates.
+    /// A frame without a person yields [`Pose::empty`], not an error.
+    fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError>;
+
+    /// Forgets any tracking state, e.g. before a run that resumes mid-video.
+    fn reset(&mut self) {}
+}

@@ -1,0 +1,5 @@
+//! Image regenerators implementing [`gait_core::ImageRegenerator`].
+
+mod passthrough;
+
+pub use passthrough::Passthrough;

@@ -1,0 +1,1 @@
+//! Edge detectors implementing [`gait_core::EdgeDetector`].

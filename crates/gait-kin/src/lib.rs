@@ -1,0 +1,1 @@
+//! Keypoint post-processing, sagittal joint angles, gait events and cycles.

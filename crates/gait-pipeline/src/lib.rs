@@ -1,0 +1,1 @@
+//! Pipeline configuration, stage registry, inputs, per-frame cache and runner.

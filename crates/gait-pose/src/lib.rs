@@ -1,0 +1,1 @@
+//! Pose estimators implementing [`gait_core::PoseEstimator`].
