@@ -5,6 +5,7 @@
 //! Stage crates implement [`EdgeDetector`], [`ImageRegenerator`] and [`PoseEstimator`];
 //! they never depend on each other, only on this crate.
 
+mod context;
 pub mod dlc;
 mod edge;
 mod error;
@@ -14,6 +15,7 @@ pub mod keypoint;
 mod pose;
 mod stage;
 
+pub use context::StageContext;
 pub use edge::EdgeMap;
 pub use error::StageError;
 pub use frame::Frame;
