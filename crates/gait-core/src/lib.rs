@@ -5,6 +5,7 @@
 //! Stage crates implement [`EdgeDetector`], [`ImageRegenerator`] and [`PoseEstimator`];
 //! they never depend on each other, only on this crate.
 
+mod backend;
 mod context;
 pub mod dlc;
 mod edge;
@@ -15,6 +16,7 @@ pub mod keypoint;
 mod pose;
 mod stage;
 
+pub use backend::Backend;
 pub use context::StageContext;
 pub use edge::EdgeMap;
 pub use error::StageError;

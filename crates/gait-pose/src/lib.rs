@@ -1,1 +1,32 @@
-//! Pose estimators implementing [`gait_core::PoseEstimator`].
+//! Pose estimators implementing [`gait_core::PoseEstimator`], chosen in the
+//! `[pose]` table of a pipeline config by `kind`.
+
+pub mod blazepose;
+
+use std::path::PathBuf;
+
+use gait_core::{PoseEstimator, StageContext, StageError};
+use serde::{Deserialize, Serialize};
+
+/// The `[pose]` table. `kind` picks the estimator; the other keys belong to it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum PoseConfig {
+    /// MediaPipe BlazePose (full), the default model.
+    Blazepose(blazepose::BlazeposeConfig),
+}
+
+impl PoseConfig {
+    pub fn build(&self, ctx: &StageContext) -> Result<Box<dyn PoseEstimator>, StageError> {
+        match self {
+            PoseConfig::Blazepose(c) => c.build(ctx),
+        }
+    }
+
+    /// Model files the estimator reads (checksummed into `run.json`).
+    pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
+        match self {
+            PoseConfig::Blazepose(c) => c.model_files(ctx),
+        }
+    }
+}
