@@ -1,10 +1,20 @@
 //! Edge detectors implementing [`gait_core::EdgeDetector`], chosen in the
 //! `[edge]` table of a pipeline config by `kind`.
 
+mod canny;
+mod canny_detector;
+mod resample;
+mod working_size;
+
 use std::path::PathBuf;
 
 use gait_core::{EdgeDetector, StageContext, StageError};
 use serde::{Deserialize, Serialize};
+
+pub use canny::{Canny, CannyParams, edge_f1};
+pub use canny_detector::{CannyConfig, CannyDetector};
+pub use resample::resize_for_annotator;
+pub use working_size::{DEFAULT_RESOLUTION, to_working_size, working_resize};
 
 /// The `[edge]` table. `kind` picks the detector; the other keys belong to it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -12,6 +22,8 @@ use serde::{Deserialize, Serialize};
 pub enum EdgeConfig {
     /// No edge map: the regenerator sees only the frame (the paper's baseline).
     None,
+    /// OpenCV-exact Canny, as ControlNet's canny annotator.
+    Canny(CannyConfig),
 }
 
 impl EdgeConfig {
@@ -19,13 +31,64 @@ impl EdgeConfig {
     pub fn build(&self, _ctx: &StageContext) -> Result<Option<Box<dyn EdgeDetector>>, StageError> {
         match self {
             EdgeConfig::None => Ok(None),
+            EdgeConfig::Canny(c) => {
+                c.validate()?;
+                Ok(Some(Box::new(CannyDetector::new(c))))
+            }
         }
     }
 
     /// Model files the detector reads (checksummed into `run.json`).
     pub fn model_files(&self, _ctx: &StageContext) -> Vec<PathBuf> {
         match self {
-            EdgeConfig::None => Vec::new(),
+            EdgeConfig::None | EdgeConfig::Canny(_) => Vec::new(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<EdgeConfig, toml::de::Error> {
+        toml::from_str(text)
+    }
+
+    #[test]
+    fn canny_keys_and_defaults() {
+        let c = parse("kind = \"canny\"").unwrap();
+        assert_eq!(c, EdgeConfig::Canny(CannyConfig::default()));
+        let c =
+            parse("kind = \"canny\"\nlow = 50\nhigh = 120.5\nl2_gradient = true\nresolution = 0")
+                .unwrap();
+        let EdgeConfig::Canny(c) = c else {
+            panic!("not canny: {c:?}")
+        };
+        assert_eq!(
+            (c.low, c.high, c.l2_gradient, c.resolution),
+            (50.0, 120.5, true, 0)
+        );
+    }
+
+    #[test]
+    fn unknown_canny_key_is_named() {
+        let err = parse("kind = \"canny\"\nthreshold = 3")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("threshold") && err.contains("l2_gradient"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn negative_threshold_is_rejected_at_build() {
+        let c = parse("kind = \"canny\"\nlow = -1").unwrap();
+        let err = c
+            .build(&StageContext::new("/nonexistent"))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("edge.low"), "{err}");
     }
 }
