@@ -1,0 +1,27 @@
+//! Evaluation of keypoints and joint angles against ground truth (the paper's
+//! Table 1 and failure modes), plots, the self-contained HTML report, and
+//! exports to OpenSim (`.trc`, `.mot`) and OpenPose JSON.
+
+mod align;
+pub mod angles;
+mod error;
+mod evaluation;
+pub mod failure;
+mod fsutil;
+mod input;
+pub mod keypoint_error;
+pub mod names;
+pub mod openpose;
+mod options;
+mod stats;
+mod table;
+
+pub use align::{Aligned, align};
+pub use angles::{ANGLE_COLUMNS, AngleTable, read_angles_csv};
+pub use error::EvalError;
+pub use evaluation::{Evaluation, evaluate_with_angles};
+pub use input::read_poses;
+pub use names::Side;
+pub use options::{EvalOptions, Role};
+pub use stats::Stat;
+pub use table::{metrics_csv, table_markdown, write_eval};
