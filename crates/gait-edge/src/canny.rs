@@ -74,7 +74,8 @@ pub struct Canny {
     /// Per-channel vertical smoothing `r0 + 2 r1 + r2` and difference `r2 - r0`.
     vsmooth: Vec<i16>,
     vdiff: Vec<i16>,
-    /// Per-channel gradients and magnitudes of the newest row.
+    /// Per-channel gradients and magnitudes of the newest row (`cmag` padded
+    /// by one on each side, so a gray row can be swapped into the ring as is).
     cdx: Vec<i16>,
     cdy: Vec<i16>,
     cmag: Vec<i32>,
@@ -165,7 +166,7 @@ impl Canny {
             v.resize(n, 0);
         }
         self.cmag.clear();
-        self.cmag.resize(n, 0);
+        self.cmag.resize(n + 2, 0);
         for k in 0..3 {
             self.dx[k].clear();
             self.dx[k].resize(w, 0);
@@ -230,7 +231,7 @@ impl Canny {
             }
         }
 
-        let cmag = &mut self.cmag;
+        let cmag = &mut self.cmag[1..=n];
         if l2 {
             for ((m, &x), &y) in cmag.iter_mut().zip(cdx.iter()).zip(cdy.iter()) {
                 *m = i32::from(x) * i32::from(x) + i32::from(y) * i32::from(y);
@@ -241,77 +242,84 @@ impl Canny {
             }
         }
 
-        let (dx, dy, mag) = (
-            &mut self.dx[slot],
-            &mut self.dy[slot],
-            &mut self.mag[slot][1..=w],
-        );
         if cn == 1 {
-            dx.copy_from_slice(cdx);
-            dy.copy_from_slice(cdy);
-            mag.copy_from_slice(cmag);
+            // The row is final: trade buffers with the ring instead of copying.
+            std::mem::swap(&mut self.dx[slot], &mut self.cdx);
+            std::mem::swap(&mut self.dy[slot], &mut self.cdy);
+            std::mem::swap(&mut self.mag[slot], &mut self.cmag);
+            let mag = &mut self.mag[slot];
+            mag[0] = 0;
+            mag[w + 1] = 0;
         } else {
-            for x in 0..w {
-                let base = x * cn;
-                let mut best = base;
-                for k in base + 1..base + cn {
-                    // Strictly greater: ties keep the first channel, as OpenCV.
-                    if cmag[k] > cmag[best] {
-                        best = k;
-                    }
-                }
-                mag[x] = cmag[best];
-                dx[x] = cdx[best];
-                dy[x] = cdy[best];
+            let (dx, dy, mag) = (
+                &mut self.dx[slot],
+                &mut self.dy[slot],
+                &mut self.mag[slot][1..=w],
+            );
+            debug_assert_eq!(cn, 3, "only gray and RGB rows reach here");
+            let picks = mag
+                .iter_mut()
+                .zip(dx.iter_mut())
+                .zip(dy.iter_mut())
+                .zip(cmag.chunks_exact(3))
+                .zip(cdx.chunks_exact(3).zip(cdy.chunks_exact(3)));
+            for ((((m, gx), gy), cm), (cx, cy)) in picks {
+                // Strictly greater: ties keep the earlier channel, as OpenCV.
+                let take1 = cm[1] > cm[0];
+                let (m01, x01, y01) = if take1 {
+                    (cm[1], cx[1], cy[1])
+                } else {
+                    (cm[0], cx[0], cy[0])
+                };
+                let take2 = cm[2] > m01;
+                *m = if take2 { cm[2] } else { m01 };
+                *gx = if take2 { cx[2] } else { x01 };
+                *gy = if take2 { cy[2] } else { y01 };
             }
         }
     }
 
     /// Non-maximum suppression and double threshold of row `y` (ring slot
-    /// `y % 3`), writing MAYBE/EDGE into the map (NEVER is already there).
+    /// `y % 3`): writes NEVER/MAYBE/EDGE into the map row and queues EDGE
+    /// pixels for hysteresis.
+    ///
+    /// The per-pixel decision is branch-free over contiguous slices so the
+    /// compiler vectorises it; textured photographs put too many pixels above
+    /// `low` for a branchy scan to predict.
     fn suppress_row(&mut self, y: usize, w: usize, stride: usize, low: i32, high: i32) {
         let cur = y % 3;
-        let prev = &self.mag[(y + 2) % 3];
-        let next = &self.mag[(y + 1) % 3];
-        let mag = &self.mag[cur];
-        let (dx, dy) = (&self.dx[cur], &self.dy[cur]);
-        let map_row = (y + 1) * stride;
+        let (prev, mag, next) = (
+            &self.mag[(y + 2) % 3],
+            &self.mag[cur],
+            &self.mag[(y + 1) % 3],
+        );
+        let map_row = (y + 1) * stride + 1;
+        let out = &mut self.map[map_row..map_row + w];
+        let (dx, dy) = (&self.dx[cur][..w], &self.dy[cur][..w]);
+        // Views shifted by one pixel: left (x - 1), centre (x), right (x + 1).
+        let (pl, pc, pr) = (&prev[..w], &prev[1..=w], &prev[2..w + 2]);
+        let (cl, cc, cr) = (&mag[..w], &mag[1..=w], &mag[2..w + 2]);
+        let (nl, nc, nr) = (&next[..w], &next[1..=w], &next[2..w + 2]);
         for x in 0..w {
-            // Magnitudes are padded: index x + 1 is pixel x.
-            let m = mag[x + 1];
-            if m <= low {
-                continue;
-            }
-            let xs = i32::from(dx[x]);
-            let ys = i32::from(dy[x]);
-            let ax = xs.abs();
-            let ay = ys.abs() << SHIFT;
-            let tg22x = ax * TG22;
-            let is_max = if ay < tg22x {
-                // Near-horizontal gradient: compare left/right.
-                m > mag[x] && m >= mag[x + 2]
-            } else {
-                let tg67x = tg22x + (ax << (SHIFT + 1));
-                if ay > tg67x {
-                    // Near-vertical gradient: compare above/below.
-                    m > prev[x + 1] && m >= next[x + 1]
-                } else {
-                    // Diagonal: same signs point down-right, else down-left.
-                    let (p, n) = if (xs ^ ys) < 0 {
-                        (x + 2, x)
-                    } else {
-                        (x, x + 2)
-                    };
-                    m > prev[p] && m > next[n]
-                }
-            };
-            if is_max {
-                let at = map_row + x + 1;
-                if m > high {
-                    self.map[at] = EDGE;
-                    self.stack.push(at);
-                } else {
-                    self.map[at] = MAYBE;
+            out[x] = classify(
+                cc[x],
+                dx[x],
+                dy[x],
+                [pl[x], pc[x], pr[x]],
+                [cl[x], cr[x]],
+                [nl[x], nc[x], nr[x]],
+                low,
+                high,
+            );
+        }
+
+        const BLOCK: usize = 32;
+        for (b, chunk) in out.chunks(BLOCK).enumerate() {
+            if chunk.iter().fold(false, |any, &v| any | (v == EDGE)) {
+                for (k, &v) in chunk.iter().enumerate() {
+                    if v == EDGE {
+                        self.stack.push(map_row + b * BLOCK + k);
+                    }
                 }
             }
         }
@@ -332,6 +340,62 @@ impl Canny {
             }
         }
     }
+}
+
+/// Map state of one pixel with magnitude `m` and gradient (`dx`, `dy`) given
+/// its neighbours' magnitudes (`prev`/`next`: left, centre, right of the rows
+/// above/below; `side`: left, right). This is OpenCV's test: the gradient
+/// direction picks the neighbour pair by the Q15 tangent comparison, and ties
+/// are broken asymmetrically (`>` towards left/up, `>=` towards right/down,
+/// `>` on both diagonals).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn classify(
+    m: i32,
+    dx: i16,
+    dy: i16,
+    prev: [i32; 3],
+    side: [i32; 2],
+    next: [i32; 3],
+    low: i32,
+    high: i32,
+) -> u8 {
+    let xs = i32::from(dx);
+    let ys = i32::from(dy);
+    let ax = xs.abs();
+    let ay = ys.abs() << SHIFT;
+    let tg22x = ax * TG22;
+    let horizontal = ay < tg22x;
+    // Beyond tan 67.5 deg; never true together with `horizontal`.
+    let vertical = ay > tg22x + (ax << (SHIFT + 1));
+    // Same signs: the gradient points down-right, so compare up-left/down-right.
+    let same_sign = (xs ^ ys) >= 0;
+    let (diag_a, diag_b) = if same_sign {
+        (prev[0], next[2])
+    } else {
+        (prev[2], next[0])
+    };
+    let a = if horizontal {
+        side[0]
+    } else if vertical {
+        prev[1]
+    } else {
+        diag_a
+    };
+    let b = if horizontal {
+        side[1]
+    } else if vertical {
+        next[1]
+    } else {
+        diag_b
+    };
+    // `m >= b` off the diagonals, `m > b` on them.
+    let b_limit = b - i32::from(horizontal | vertical);
+    let is_max = (m > low) & (m > a) & (m > b_limit);
+    let strong = m > high;
+    // NEVER = 1, MAYBE = 0, EDGE = 2.
+    let state = if strong { EDGE } else { MAYBE };
+    if is_max { state } else { NEVER }
 }
 
 /// F1 agreement of two binary edge maps (non-zero = edge): harmonic mean of
