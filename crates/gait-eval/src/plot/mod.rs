@@ -1,0 +1,118 @@
+//! Figures as PNG and SVG, drawn with plotters and the embedded DejaVu Sans
+//! font (no system font libraries).
+
+mod cycles;
+mod failure_bars;
+mod skeleton;
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use plotters::prelude::*;
+use plotters::coord::Shift;
+
+pub use cycles::{CycleCurve, comparison_plot, kinematics_plot, read_cycles_csv};
+pub use failure_bars::{FailureEntry, failure_bars};
+pub use skeleton::{StripOptions, skeleton_strip};
+
+use crate::EvalError;
+use crate::fsutil::{ensure_dir, write_atomic};
+
+/// DejaVu Sans 2.37 (Bitstream Vera licence, see `assets/DejaVuSans-LICENSE.txt`).
+static DEJAVU_SANS: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+
+/// The font family name every figure uses.
+pub(crate) const FONT: &str = "sans-serif";
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The bytes are a valid TrueType font committed with the crate; a
+        // failure here would show as missing text, which the tests catch.
+        let _ = plotters::style::register_font(FONT, FontStyle::Normal, DEJAVU_SANS);
+    });
+}
+
+/// A rendered figure.
+#[derive(Debug, Clone)]
+pub struct Figure {
+    pub name: String,
+    pub svg: String,
+    pub png: Vec<u8>,
+}
+
+impl Figure {
+    /// Writes `<name>.svg` and `<name>.png` into `dir`; returns their paths.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, EvalError> {
+        ensure_dir(dir)?;
+        let svg = dir.join(format!("{}.svg", self.name));
+        let png = dir.join(format!("{}.png", self.name));
+        write_atomic(&svg, self.svg.as_bytes())?;
+        write_atomic(&png, &self.png)?;
+        Ok(vec![svg, png])
+    }
+}
+
+/// Something drawable on any plotters backend.
+pub(crate) trait Draw {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, bitmap: bool) -> Result<(), String>;
+}
+
+fn err<E: std::fmt::Debug>(e: E) -> String {
+    format!("{e:?}")
+}
+
+/// Renders `d` at `w` x `h` pixels as SVG and as PNG (over `background`
+/// when given: an RGB image of exactly that size).
+pub(crate) fn render(d: &impl Draw, name: &str, w: u32, h: u32, background: Option<image::RgbImage>) -> Result<Figure, EvalError> {
+    register_font();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| EvalError::plot(name, err(e)))?;
+        d.draw(&root, false).map_err(|e| EvalError::plot(name, e))?;
+        root.present().map_err(|e| EvalError::plot(name, err(e)))?;
+    }
+    let has_background = background.is_some();
+    let mut buf = match background {
+        Some(img) if img.dimensions() == (w, h) => img.into_raw(),
+        Some(_) => return Err(EvalError::plot(name, "background size differs from the figure")),
+        None => vec![255u8; (w * h * 3) as usize],
+    };
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        if !has_background {
+            root.fill(&WHITE).map_err(|e| EvalError::plot(name, err(e)))?;
+        }
+        d.draw(&root, true).map_err(|e| EvalError::plot(name, e))?;
+        root.present().map_err(|e| EvalError::plot(name, err(e)))?;
+    }
+    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| EvalError::plot(name, "pixel buffer size"))?;
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .map_err(|e| EvalError::plot(name, e))?;
+    Ok(Figure { name: name.to_string(), svg, png })
+}
+
+/// Line colours: intact blue, prosthetic red (as in the paper's figures).
+pub(crate) const INTACT: RGBColor = RGBColor(31, 119, 180);
+pub(crate) const PROSTHETIC: RGBColor = RGBColor(214, 39, 40);
+pub(crate) const TRUTH: RGBColor = RGBColor(44, 160, 44);
+/// Further method colours, in order.
+pub(crate) const PALETTE: [RGBColor; 5] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+
+/// Range of finite values padded by 5 %, or (-1, 1) when there are none.
+pub(crate) fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    if !lo.is_finite() {
+        return (-1.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.05).max(1.0);
+    (lo - pad, hi + pad)
+}
