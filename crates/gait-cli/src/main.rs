@@ -1,1 +1,46 @@
-fn main() {}
+//! `gait`: markerless gait analysis for lower-limb prosthetic users.
+
+mod commands;
+mod error;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use crate::error::CliError;
+
+/// Markerless gait analysis of lower-limb prosthetic users from ordinary video.
+///
+/// Pipeline: frames -> edge map -> regenerated frame (ControlNet) -> pose ->
+/// filtered keypoints -> joint angles -> gait cycles -> report.
+#[derive(Debug, Parser)]
+#[command(name = "gait", version, about, long_about = None)]
+struct Cli {
+    /// Folder with model files [default: $GAIT_MODELS_DIR, else ~/.cache/gait/models]
+    #[arg(long, global = true, value_name = "DIR")]
+    models_dir: Option<PathBuf>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run the pipeline on a video, an image folder or an image.
+    Run(commands::run::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let models_dir = commands::models_dir(cli.models_dir);
+    let result: Result<(), CliError> = match cli.command {
+        Command::Run(args) => commands::run::execute(args, &models_dir),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

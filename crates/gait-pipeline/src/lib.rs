@@ -1,1 +1,16 @@
-//! Pipeline configuration, stage registry, inputs, per-frame cache and runner.
+//! Everything between the command line and the stages: the TOML pipeline
+//! configuration, the stage registry, input decoding, the per-frame cache and
+//! the runner that drives frames through the stages.
+
+pub mod atomic;
+mod cache;
+pub mod config;
+mod error;
+pub mod input;
+pub mod manifest;
+pub mod registry;
+pub mod runner;
+
+pub use config::PipelineConfig;
+pub use error::PipelineError;
+pub use runner::{RunOptions, RunSummary, run};

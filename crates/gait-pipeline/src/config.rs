@@ -1,0 +1,277 @@
+//! The pipeline configuration: one TOML file with a table per stage, plus
+//! `--set table.key=value` overrides, resolved into typed stage configs.
+//!
+//! Each stage table picks its implementation with `kind` (and `backend` where
+//! a model runs). Unknown tables, keys, kinds and backends are errors that
+//! name the offending key and list the valid choices.
+
+use std::path::{Path, PathBuf};
+
+use gait_diffuse::RegeneratorConfig;
+use gait_edge::EdgeConfig;
+use gait_pose::PoseConfig;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+use crate::PipelineError;
+
+/// The built-in baseline: no edge map, passthrough, the default pose model.
+pub const DEFAULT_TOML: &str = include_str!("../../../configs/default.toml");
+
+/// Which frames of the input to use.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InputConfig {
+    /// First frame index to process (0-based).
+    pub first_frame: usize,
+    /// Last frame index to process (inclusive); absent = to the end.
+    pub last_frame: Option<usize>,
+    /// Frame rate; absent = the video's own (image folders default to 30).
+    pub fps: Option<f64>,
+}
+
+impl Default for InputConfig {
+    fn default() -> Self {
+        Self {
+            first_frame: 0,
+            last_frame: None,
+            fps: None,
+        }
+    }
+}
+
+/// How the runner drives the stages.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    /// Frames handed to each stage at once.
+    pub batch_size: usize,
+    /// Keep per-frame stage results on disk so interrupted or changed runs
+    /// recompute only what they must.
+    pub cache: bool,
+    /// Where the cache lives; absent = `<out>/cache`. Point several runs at
+    /// one folder to share stage results between them (ablations).
+    pub cache_dir: Option<PathBuf>,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        Self {
+            batch_size: 4,
+            cache: true,
+            cache_dir: None,
+        }
+    }
+}
+
+/// The whole resolved configuration of a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PipelineConfig {
+    pub input: InputConfig,
+    pub run: RunConfig,
+    pub edge: EdgeConfig,
+    pub regenerator: RegeneratorConfig,
+    pub pose: PoseConfig,
+}
+
+const TABLES: [&str; 5] = ["input", "run", "edge", "regenerator", "pose"];
+
+impl PipelineConfig {
+    /// Loads `path` (a pipeline TOML, or a previous run's `run.json` to
+    /// repeat that run), or the built-in default, then applies `sets`.
+    pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Self, PipelineError> {
+        let (origin, mut table) = match path {
+            None => ("configs/default.toml (built in)".to_string(), parse_toml("default", DEFAULT_TOML)?),
+            Some(p) => {
+                let origin = p.display().to_string();
+                let text = std::fs::read_to_string(p).map_err(|e| {
+                    PipelineError::config(&origin, format!("cannot read the file ({e})"))
+                })?;
+                let table = if p.extension().is_some_and(|e| e == "json") {
+                    from_run_json(&origin, &text)?
+                } else {
+                    parse_toml(&origin, &text)?
+                };
+                (origin, table)
+            }
+        };
+        for set in sets {
+            apply_set(&mut table, set)?;
+        }
+        Self::from_table(&origin, table)
+    }
+
+    /// Resolves a parsed TOML table.
+    pub fn from_table(origin: &str, mut table: toml::Table) -> Result<Self, PipelineError> {
+        if let Some(bad) = table.keys().find(|k| !TABLES.contains(&k.as_str())) {
+            return Err(PipelineError::config(
+                origin,
+                format!("unknown table `[{bad}]`; valid tables: {}", TABLES.join(", ")),
+            ));
+        }
+        let defaults = parse_toml("default", DEFAULT_TOML)?;
+        let mut take = |name: &str| -> Result<toml::Table, PipelineError> {
+            let given = match table.remove(name) {
+                None => toml::Table::new(),
+                Some(toml::Value::Table(t)) => t,
+                Some(_) => {
+                    return Err(PipelineError::config(origin, format!("`{name}` must be a table `[{name}]`")));
+                }
+            };
+            Ok(with_default_kind(given, defaults.get(name)))
+        };
+        let config = Self {
+            input: table_as(origin, "input", take("input")?)?,
+            run: table_as(origin, "run", take("run")?)?,
+            edge: table_as(origin, "edge", take("edge")?)?,
+            regenerator: table_as(origin, "regenerator", take("regenerator")?)?,
+            pose: table_as(origin, "pose", take("pose")?)?,
+        };
+        config.validate(origin)?;
+        Ok(config)
+    }
+
+    fn validate(&self, origin: &str) -> Result<(), PipelineError> {
+        if self.run.batch_size == 0 {
+            return Err(PipelineError::config(origin, "[run] batch_size must be at least 1"));
+        }
+        if let Some(last) = self.input.last_frame
+            && last < self.input.first_frame
+        {
+            return Err(PipelineError::config(origin, "[input] last_frame is before first_frame"));
+        }
+        if self.input.fps.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
+            return Err(PipelineError::config(origin, "[input] fps must be a positive number"));
+        }
+        if self.regenerator.needs_edges() && matches!(self.edge, EdgeConfig::None) {
+            return Err(PipelineError::config(
+                origin,
+                "[regenerator] needs an edge map but [edge] kind is \"none\"; set edge.kind (e.g. \"canny\")",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The resolved configuration as TOML, with every default filled in.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_else(|e| format!("# cannot serialise the config: {e}\n"))
+    }
+}
+
+fn parse_toml(origin: &str, text: &str) -> Result<toml::Table, PipelineError> {
+    text.parse::<toml::Table>()
+        .map_err(|e| PipelineError::config(origin, one_line(&e.to_string())))
+}
+
+/// A run.json holds the resolved config under `config`; running from it
+/// repeats that run.
+fn from_run_json(origin: &str, text: &str) -> Result<toml::Table, PipelineError> {
+    let json: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| PipelineError::config(origin, format!("not valid JSON ({e})")))?;
+    let config = json
+        .get("config")
+        .ok_or_else(|| PipelineError::config(origin, "a .json config must be a run.json with a `config` field"))?;
+    toml::Table::try_from(config).map_err(|e| PipelineError::config(origin, e))
+}
+
+/// A table without `kind` gets the default table's kind, so
+/// `--set pose.backend=ort` alone keeps the default pose model.
+fn with_default_kind(mut given: toml::Table, default: Option<&toml::Value>) -> toml::Table {
+    if !given.contains_key("kind")
+        && let Some(kind) = default.and_then(|d| d.get("kind"))
+    {
+        given.insert("kind".into(), kind.clone());
+    }
+    given
+}
+
+fn table_as<T: DeserializeOwned>(origin: &str, name: &str, table: toml::Table) -> Result<T, PipelineError> {
+    T::deserialize(toml::Value::Table(table))
+        .map_err(|e| PipelineError::config(origin, format!("[{name}]: {}", one_line(&e.to_string()))))
+}
+
+/// Applies one `table.key=value` override. The value is read as TOML
+/// (numbers, booleans, arrays, quoted strings); anything else is a string.
+fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), PipelineError> {
+    let origin = format!("--set {set}");
+    let (path, raw) = set
+        .split_once('=')
+        .ok_or_else(|| PipelineError::config(&origin, "expected table.key=value"))?;
+    let keys: Vec<&str> = path.trim().split('.').collect();
+    if keys.len() < 2 || keys.iter().any(|k| k.is_empty()) {
+        return Err(PipelineError::config(&origin, "expected table.key=value, e.g. pose.backend=ort"));
+    }
+    let value = format!("v = {raw}")
+        .parse::<toml::Table>()
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(raw.trim().to_string()));
+    let mut node = table;
+    for key in &keys[..keys.len() - 1] {
+        let entry = node
+            .entry(key.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        node = entry
+            .as_table_mut()
+            .ok_or_else(|| PipelineError::config(&origin, format!("`{key}` is not a table")))?;
+    }
+    node.insert(keys[keys.len() - 1].to_string(), value);
+    Ok(())
+}
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load_str(text: &str, sets: &[&str]) -> Result<PipelineConfig, PipelineError> {
+        let mut t = parse_toml("test", text)?;
+        for s in sets {
+            apply_set(&mut t, s)?;
+        }
+        PipelineConfig::from_table("test", t)
+    }
+
+    #[test]
+    fn default_is_the_baseline() {
+        let c = PipelineConfig::load(None, &[]).unwrap();
+        assert_eq!(c.edge, EdgeConfig::None);
+        assert_eq!(c.regenerator, RegeneratorConfig::Passthrough);
+        assert!(matches!(c.pose, PoseConfig::Blazepose(_)));
+    }
+
+    #[test]
+    fn set_overrides_and_keeps_the_kind() {
+        let c = load_str("", &["pose.backend=ort", "run.batch_size=2"]).unwrap();
+        let PoseConfig::Blazepose(b) = &c.pose;
+        assert_eq!(b.backend, gait_core::Backend::Ort);
+        assert_eq!(c.run.batch_size, 2);
+    }
+
+    #[test]
+    fn errors_name_the_key_and_the_choices() {
+        let e = load_str("[edge]\nkind = \"sobelx\"\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("[edge]") && e.contains("sobelx") && e.contains("none"), "{e}");
+        let e = load_str("[pose]\nbackend = \"tensorrt\"\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("[pose]") && e.contains("tensorrt") && e.contains("candle") && e.contains("ort"), "{e}");
+        let e = load_str("[pose]\nbackend_typo = 1\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("backend_typo") && e.contains("backend"), "{e}");
+        let e = load_str("[edges]\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("[edges]") && e.contains("edge"), "{e}");
+        let e = load_str("[run]\nbatch_size = 0\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("batch_size"), "{e}");
+        assert!(load_str("x = [", &[]).is_err());
+        assert!(load_str("", &["nodot=1"]).is_err());
+    }
+
+    #[test]
+    fn resolved_config_round_trips() {
+        let c = load_str("[run]\nbatch_size = 3\n", &[]).unwrap();
+        let text = c.to_toml();
+        let back = PipelineConfig::from_table("again", parse_toml("again", &text).unwrap()).unwrap();
+        assert_eq!(back, c);
+    }
+}

@@ -1,0 +1,46 @@
+use std::path::PathBuf;
+
+use gait_core::StageError;
+
+/// Everything that can stop a pipeline run; each variant says what is wrong
+/// and, where possible, what to do about it.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    #[error("config {origin}: {message}")]
+    Config { origin: String, message: String },
+    #[error("input {path}: {message}")]
+    Input { path: PathBuf, message: String },
+    #[error(transparent)]
+    Stage(#[from] StageError),
+    #[error("{context}: {source}")]
+    Io {
+        context: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cache {path}: {message}")]
+    Cache { path: PathBuf, message: String },
+}
+
+impl PipelineError {
+    pub(crate) fn io(context: impl Into<String>, source: std::io::Error) -> Self {
+        Self::Io {
+            context: context.into(),
+            source,
+        }
+    }
+
+    pub(crate) fn config(origin: impl Into<String>, message: impl ToString) -> Self {
+        Self::Config {
+            origin: origin.into(),
+            message: message.to_string(),
+        }
+    }
+
+    pub(crate) fn input(path: impl Into<PathBuf>, message: impl ToString) -> Self {
+        Self::Input {
+            path: path.into(),
+            message: message.to_string(),
+        }
+    }
+}

@@ -1,0 +1,337 @@
+//! Inputs: a video file (decoded by the `ffmpeg` command line tool), a folder
+//! of images, or a single image, read as a stream of RGB frames.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+use gait_core::Frame;
+use sha2::{Digest, Sha256};
+
+use crate::PipelineError;
+
+const VIDEO_EXTENSIONS: [&str; 6] = ["mp4", "avi", "mov", "webm", "mkv", "m4v"];
+const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "bmp", "tif"];
+
+/// Frame rate assumed for image folders and single images.
+pub const DEFAULT_IMAGE_FPS: f64 = 30.0;
+
+/// What the input is and what is known about it before decoding.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputInfo {
+    pub path: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub fps: f64,
+    /// Number of frames, when the container says.
+    pub frames: Option<usize>,
+    kind: Kind,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Kind {
+    Video,
+    Images(Vec<PathBuf>),
+}
+
+impl InputInfo {
+    /// Inspects `path` without decoding it whole.
+    pub fn open(path: &Path) -> Result<Self, PipelineError> {
+        if !path.exists() {
+            return Err(PipelineError::input(path, "no such file or folder; check the --input path"));
+        }
+        if path.is_dir() {
+            return Self::folder(path);
+        }
+        let ext = extension(path);
+        if IMAGE_EXTENSIONS.contains(&ext.as_str()) {
+            return Self::images(path, vec![path.to_path_buf()]);
+        }
+        if VIDEO_EXTENSIONS.contains(&ext.as_str()) {
+            return probe_video(path);
+        }
+        Err(PipelineError::input(
+            path,
+            format!(
+                "unsupported file type `.{ext}`; give a video ({}), an image ({}) or a folder of images",
+                VIDEO_EXTENSIONS.join(", "),
+                IMAGE_EXTENSIONS.join(", ")
+            ),
+        ))
+    }
+
+    fn folder(dir: &Path) -> Result<Self, PipelineError> {
+        let entries = std::fs::read_dir(dir).map_err(|e| PipelineError::input(dir, format!("cannot list the folder ({e})")))?;
+        let mut files: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && IMAGE_EXTENSIONS.contains(&extension(p).as_str()))
+            .collect();
+        if files.is_empty() {
+            return Err(PipelineError::input(
+                dir,
+                format!("the folder has no images ({}); put the frames there or give a video", IMAGE_EXTENSIONS.join(", ")),
+            ));
+        }
+        // Natural order, so frame_2 comes before frame_10.
+        files.sort_by(|a, b| natural_key(a).cmp(&natural_key(b)));
+        Self::images(dir, files)
+    }
+
+    fn images(path: &Path, files: Vec<PathBuf>) -> Result<Self, PipelineError> {
+        let (width, height) = image::image_dimensions(&files[0])
+            .map_err(|e| PipelineError::input(&files[0], format!("unreadable image ({e})")))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            width,
+            height,
+            fps: DEFAULT_IMAGE_FPS,
+            frames: Some(files.len()),
+            kind: Kind::Images(files),
+        })
+    }
+
+    /// A content hash of the input, so cached results of another input (or
+    /// of an edited file with the same name) are never reused.
+    pub fn fingerprint(&self) -> Result<String, PipelineError> {
+        let mut hasher = Sha256::new();
+        let files = match &self.kind {
+            Kind::Video => vec![self.path.clone()],
+            Kind::Images(files) => files.clone(),
+        };
+        for f in &files {
+            let mut file = std::fs::File::open(f).map_err(|e| PipelineError::input(f, e))?;
+            hasher.update(f.file_name().map(|n| n.as_encoded_bytes()).unwrap_or_default());
+            let mut buf = vec![0u8; 1 << 20];
+            loop {
+                let n = file.read(&mut buf).map_err(|e| PipelineError::input(f, e))?;
+                if n == 0 {
+                    break;
+                }
+                hasher.update(&buf[..n]);
+            }
+        }
+        Ok(hex(&hasher.finalize()))
+    }
+
+    /// Decodes the frames in order.
+    pub fn frames(&self) -> Result<FrameReader, PipelineError> {
+        let source = match &self.kind {
+            Kind::Images(files) => Source::Images(files.clone()),
+            Kind::Video => {
+                let child = Command::new("ffmpeg")
+                    .args(["-v", "error", "-nostdin", "-i"])
+                    .arg(&self.path)
+                    .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+                    .stdin(Stdio::null())
+                    .stdout(Stdio::piped())
+                    .stderr(Stdio::piped())
+                    .spawn()
+                    .map_err(|e| ffmpeg_missing(&self.path, e))?;
+                Source::Video(child)
+            }
+        };
+        Ok(FrameReader {
+            info: self.clone(),
+            source,
+            next: 0,
+        })
+    }
+}
+
+pub(crate) fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+fn natural_key(path: &Path) -> (String, u64, String) {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = name.rsplit_once('.').map_or(name.as_str(), |(s, _)| s);
+    let digits: String = stem.chars().rev().take_while(char::is_ascii_digit).collect::<Vec<_>>().into_iter().rev().collect();
+    let prefix = stem[..stem.len() - digits.len()].to_string();
+    (prefix, digits.parse().unwrap_or(0), name)
+}
+
+fn ffmpeg_missing(path: &Path, e: std::io::Error) -> PipelineError {
+    PipelineError::input(
+        path,
+        format!("cannot run ffmpeg ({e}); install it (Debian: apt-get install ffmpeg) or give a folder of images"),
+    )
+}
+
+fn probe_video(path: &Path) -> Result<InputInfo, PipelineError> {
+    let out = Command::new("ffprobe")
+        .args(["-v", "error", "-select_streams", "v:0", "-show_entries"])
+        .arg("stream=width,height,r_frame_rate,nb_frames:stream_side_data=rotation")
+        .args(["-of", "json"])
+        .arg(path)
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| ffmpeg_missing(path, e))?;
+    let bad = |why: &str| PipelineError::input(path, format!("not a readable video ({why}); check the file or re-encode it"));
+    if !out.status.success() {
+        let msg = String::from_utf8_lossy(&out.stderr);
+        return Err(bad(msg.lines().next().unwrap_or("ffprobe failed").trim()));
+    }
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).map_err(|_| bad("ffprobe output unreadable"))?;
+    let stream = json["streams"].get(0).ok_or_else(|| bad("no video stream"))?;
+    let dim = |k: &str| stream[k].as_u64().filter(|v| *v > 0).map(|v| v as u32);
+    let (mut width, mut height) = match (dim("width"), dim("height")) {
+        (Some(w), Some(h)) => (w, h),
+        _ => return Err(bad("no frame size")),
+    };
+    let rotation = stream["side_data_list"]
+        .as_array()
+        .and_then(|l| l.iter().find_map(|d| d["rotation"].as_i64()))
+        .unwrap_or(0);
+    // ffmpeg applies the rotation when decoding, so the frames are turned.
+    if rotation.rem_euclid(180) == 90 {
+        std::mem::swap(&mut width, &mut height);
+    }
+    let fps = stream["r_frame_rate"]
+        .as_str()
+        .and_then(|r| {
+            let (n, d) = r.split_once('/')?;
+            let (n, d): (f64, f64) = (n.parse().ok()?, d.parse().ok()?);
+            (d > 0.0 && n > 0.0).then(|| n / d)
+        })
+        .ok_or_else(|| bad("no frame rate"))?;
+    let frames = stream["nb_frames"].as_str().and_then(|n| n.parse().ok());
+    Ok(InputInfo {
+        path: path.to_path_buf(),
+        width,
+        height,
+        fps,
+        frames,
+        kind: Kind::Video,
+    })
+}
+
+enum Source {
+    Video(Child),
+    Images(Vec<PathBuf>),
+}
+
+/// Yields frames in input order.
+pub struct FrameReader {
+    info: InputInfo,
+    source: Source,
+    next: usize,
+}
+
+impl FrameReader {
+    /// The next frame, `Ok(None)` at the end.
+    pub fn next_frame(&mut self) -> Result<Option<Frame>, PipelineError> {
+        let index = self.next;
+        let image = match &mut self.source {
+            Source::Images(files) => {
+                let Some(path) = files.get(index) else { return Ok(None) };
+                let img = image::open(path).map_err(|e| PipelineError::input(path, format!("unreadable image ({e})")))?;
+                let img = img.to_rgb8();
+                if (img.width(), img.height()) != (self.info.width, self.info.height) {
+                    return Err(PipelineError::input(
+                        path,
+                        format!(
+                            "image is {}x{} but the first image is {}x{}; all frames must have one size",
+                            img.width(),
+                            img.height(),
+                            self.info.width,
+                            self.info.height
+                        ),
+                    ));
+                }
+                img
+            }
+            Source::Video(child) => {
+                let len = self.info.width as usize * self.info.height as usize * 3;
+                let mut buf = vec![0u8; len];
+                let stdout = child.stdout.as_mut().ok_or_else(|| PipelineError::input(&self.info.path, "ffmpeg has no output"))?;
+                let mut filled = 0;
+                while filled < len {
+                    match stdout.read(&mut buf[filled..]) {
+                        Ok(0) => break,
+                        Ok(n) => filled += n,
+                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                        Err(e) => return Err(PipelineError::input(&self.info.path, e)),
+                    }
+                }
+                if filled == 0 {
+                    return self.finish_video(index);
+                }
+                if filled < len {
+                    return Err(PipelineError::input(&self.info.path, format!("frame {index} is truncated; the video is damaged")));
+                }
+                image::RgbImage::from_raw(self.info.width, self.info.height, buf)
+                    .ok_or_else(|| PipelineError::input(&self.info.path, "frame buffer size mismatch"))?
+            }
+        };
+        self.next += 1;
+        Ok(Some(Frame::new(index, image)))
+    }
+
+    /// At the end of ffmpeg's output: a clean end, or the decoder's error.
+    fn finish_video(&mut self, index: usize) -> Result<Option<Frame>, PipelineError> {
+        let Source::Video(child) = &mut self.source else { return Ok(None) };
+        let mut err = String::new();
+        if let Some(mut e) = child.stderr.take() {
+            let _ = e.read_to_string(&mut err);
+        }
+        let status = child.wait().map_err(|e| PipelineError::input(&self.info.path, e))?;
+        if !status.success() || (index == 0 && !err.trim().is_empty()) {
+            let first = err.lines().find(|l| !l.trim().is_empty()).unwrap_or("ffmpeg failed").trim().to_string();
+            return Err(PipelineError::input(&self.info.path, format!("cannot decode the video: {first}")));
+        }
+        if index == 0 {
+            return Err(PipelineError::input(&self.info.path, "the video has no frames"));
+        }
+        Ok(None)
+    }
+}
+
+impl Drop for FrameReader {
+    fn drop(&mut self) {
+        if let Source::Video(child) = &mut self.source {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folders_are_read_in_natural_order() {
+        let dir = tempfile::tempdir().unwrap();
+        for (i, name) in ["f10.png", "f2.png", "f1.png"].iter().enumerate() {
+            let img = image::RgbImage::from_pixel(4, 3, image::Rgb([i as u8, 0, 0]));
+            img.save(dir.path().join(name)).unwrap();
+        }
+        std::fs::write(dir.path().join("notes.txt"), "not a frame").unwrap();
+        let info = InputInfo::open(dir.path()).unwrap();
+        assert_eq!((info.width, info.height, info.frames), (4, 3, Some(3)));
+        let mut r = info.frames().unwrap();
+        let reds: Vec<u8> = std::iter::from_fn(|| r.next_frame().unwrap()).map(|f| f.image.get_pixel(0, 0)[0]).collect();
+        assert_eq!(reds, vec![2, 1, 0]);
+    }
+
+    #[test]
+    fn bad_inputs_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = InputInfo::open(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("no images"), "{e}");
+        let e = InputInfo::open(&dir.path().join("nope.mp4")).unwrap_err().to_string();
+        assert!(e.contains("no such file"), "{e}");
+        let txt = dir.path().join("a.txt");
+        std::fs::write(&txt, "x").unwrap();
+        assert!(InputInfo::open(&txt).unwrap_err().to_string().contains("unsupported"));
+        let png = dir.path().join("a.png");
+        std::fs::write(&png, "not a png").unwrap();
+        assert!(InputInfo::open(&png).unwrap_err().to_string().contains("unreadable image"));
+    }
+}

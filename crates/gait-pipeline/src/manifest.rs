@@ -1,0 +1,86 @@
+//! `run.json`: everything needed to understand and repeat a run — the
+//! resolved config, tool version, input and model checksums, timings.
+
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use sha2::{Digest, Sha256};
+
+use crate::input::hex;
+
+/// The run manifest written as `run.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunManifest {
+    pub tool: &'static str,
+    pub version: &'static str,
+    /// Seconds since the Unix epoch when the run started.
+    pub started_unix: u64,
+    pub command: Vec<String>,
+    pub input: InputRecord,
+    /// The resolved configuration; `gait run --config run.json` repeats the run.
+    pub config: serde_json::Value,
+    pub models: Vec<ModelRecord>,
+    pub stages: BTreeMap<String, StageRecord>,
+    pub frames_processed: usize,
+    /// Frames whose pose came from the cache (a resumed or repeated run).
+    pub frames_from_cache: usize,
+    pub keypoint_names: Vec<String>,
+    pub warnings: Vec<String>,
+    /// Summaries added by later steps (kinematics, reports).
+    pub extra: BTreeMap<String, serde_json::Value>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct InputRecord {
+    pub path: PathBuf,
+    pub sha256: String,
+    pub width: u32,
+    pub height: u32,
+    pub fps: f64,
+    pub first_frame: usize,
+    pub last_frame: Option<usize>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelRecord {
+    pub path: PathBuf,
+    /// Absent when the file could not be read.
+    pub sha256: Option<String>,
+}
+
+/// Work done by one stage: how many frames it computed, how many came from
+/// the cache, and the seconds spent computing.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct StageRecord {
+    pub kind: String,
+    pub cache_key: String,
+    pub computed: usize,
+    pub cached: usize,
+    pub seconds: f64,
+}
+
+/// SHA-256 of a file, streamed.
+pub fn sha256_file(path: &Path) -> std::io::Result<String> {
+    let mut f = std::fs::File::open(path)?;
+    let mut h = Sha256::new();
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        let n = f.read(&mut buf)?;
+        if n == 0 {
+            return Ok(hex(&h.finalize()));
+        }
+        h.update(&buf[..n]);
+    }
+}
+
+pub(crate) fn model_records(paths: Vec<PathBuf>) -> Vec<ModelRecord> {
+    paths
+        .into_iter()
+        .map(|path| ModelRecord {
+            sha256: sha256_file(&path).ok(),
+            path,
+        })
+        .collect()
+}

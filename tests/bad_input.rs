@@ -1,0 +1,157 @@
+//! Bad input gives one clear line on stderr, exit code 2, no panic, and no
+//! output file that looks complete.
+
+mod common;
+
+use common::{fails_with, gait};
+use std::path::Path;
+
+fn assert_no_results(out: &Path) {
+    for f in ["keypoints.csv", "run.json"] {
+        assert!(!out.join(f).exists(), "{f} must not exist after a failed run");
+    }
+}
+
+#[test]
+fn missing_video() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    fails_with(
+        gait().args(["run", "--no-progress", "--input"]).arg(dir.path().join("nope.mp4")).arg("--out").arg(&out),
+        &["nope.mp4", "no such file"],
+    );
+    assert_no_results(&out);
+}
+
+#[test]
+fn corrupt_video() {
+    let dir = tempfile::tempdir().unwrap();
+    let video = dir.path().join("broken.mp4");
+    std::fs::write(&video, b"this is not a video at all, just text pretending").unwrap();
+    let out = dir.path().join("out");
+    fails_with(
+        gait().args(["run", "--no-progress", "--input"]).arg(&video).arg("--out").arg(&out),
+        &["broken.mp4", "not a readable video"],
+    );
+    assert_no_results(&out);
+}
+
+#[test]
+fn truncated_video() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = std::fs::read(common::sample_video()).unwrap();
+    let video = dir.path().join("cut.mp4");
+    std::fs::write(&video, &bytes[..bytes.len() / 50]).unwrap();
+    let out = dir.path().join("out");
+    let out_status = gait()
+        .args(["run", "--no-progress", "--input"])
+        .arg(&video)
+        .arg("--out")
+        .arg(&out)
+        .env("GAIT_MODELS_DIR", dir.path())
+        .output()
+        .unwrap();
+    // Either the container is unreadable or the model is missing; both are
+    // one-line errors with exit code 2 and no results.
+    assert_eq!(out_status.status.code(), Some(2));
+    assert!(!String::from_utf8_lossy(&out_status.stderr).contains("panicked"));
+    assert_no_results(&out);
+}
+
+#[test]
+fn empty_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    fails_with(
+        gait().args(["run", "--no-progress", "--input"]).arg(&frames).arg("--out").arg(dir.path().join("out")),
+        &["frames", "no images"],
+    );
+}
+
+#[test]
+fn unreadable_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = dir.path().join("frame.png");
+    std::fs::write(&img, b"\x89PNG but not really").unwrap();
+    fails_with(
+        gait().args(["run", "--no-progress", "--input"]).arg(&img).arg("--out").arg(dir.path().join("out")),
+        &["frame.png", "unreadable image"],
+    );
+}
+
+#[test]
+fn toml_syntax_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("bad.toml");
+    std::fs::write(&cfg, "[pose\nkind = \"blazepose\"\n").unwrap();
+    fails_with(
+        gait()
+            .args(["run", "--no-progress", "--config"])
+            .arg(&cfg)
+            .arg("--input")
+            .arg(common::sample_video())
+            .arg("--out")
+            .arg(dir.path().join("out")),
+        &["bad.toml", "line 1"],
+    );
+}
+
+#[test]
+fn unknown_stage_kind_lists_the_choices() {
+    let dir = tempfile::tempdir().unwrap();
+    fails_with(
+        gait()
+            .args(["run", "--no-progress", "--set", "edge.kind=sobelx", "--input"])
+            .arg(common::sample_video())
+            .arg("--out")
+            .arg(dir.path().join("out")),
+        &["[edge]", "sobelx", "none"],
+    );
+    fails_with(
+        gait()
+            .args(["run", "--no-progress", "--set", "pose.backend=tensorrt", "--input"])
+            .arg(common::sample_video())
+            .arg("--out")
+            .arg(dir.path().join("out")),
+        &["[pose]", "tensorrt", "candle", "ort"],
+    );
+}
+
+#[test]
+fn missing_model_file_names_the_fetch_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    fails_with(
+        gait()
+            .args(["run", "--no-progress", "--models-dir"])
+            .arg(dir.path().join("no-models"))
+            .arg("--input")
+            .arg(common::sample_video())
+            .arg("--out")
+            .arg(&out),
+        &["pose_detection.tflite", "gait models fetch blazepose"],
+    );
+    assert_no_results(&out);
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    let out = gait().arg("--help").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let subcommands: Vec<String> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next().map(str::to_string))
+        .filter(|c| c != "help")
+        .collect();
+    assert!(subcommands.contains(&"run".to_string()), "{text}");
+    for sub in subcommands {
+        let out = gait().args([sub.as_str(), "--help"]).output().unwrap();
+        assert!(out.status.success(), "gait {sub} --help failed");
+        assert!(String::from_utf8_lossy(&out.stdout).contains("Usage: gait"), "gait {sub} --help");
+    }
+}

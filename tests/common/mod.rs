@@ -1,0 +1,54 @@
+//! Helpers shared by the end-to-end tests of the `gait` command.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The bundled sample video (real walking footage).
+pub fn sample_video() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/sample/sports2d-demo.mp4")
+}
+
+/// The models folder prepared by tools/test.sh (`gait models fetch ...`).
+pub fn models_dir() -> PathBuf {
+    match std::env::var_os("GAIT_MODELS_DIR") {
+        Some(d) if Path::new(&d).is_dir() => PathBuf::from(d),
+        _ => panic!("GAIT_MODELS_DIR is not set to a folder with the models: run the tests through tools/test.sh"),
+    }
+}
+
+pub fn gait() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_gait"))
+}
+
+pub fn run_ok(cmd: &mut Command) -> Output {
+    let out = cmd.output().expect("gait runs");
+    assert!(
+        out.status.success(),
+        "gait failed: {}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Runs a command that must fail with exit code 2 and one line on stderr
+/// containing every one of `needles`.
+pub fn fails_with(cmd: &mut Command, needles: &[&str]) -> String {
+    let out = cmd.output().expect("gait runs");
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(out.status.code(), Some(2), "expected exit code 2, stderr: {err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "expected one line on stderr, got: {err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks `{n}`: {err}");
+    }
+    err
+}
+
+pub fn read_json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).expect("valid JSON")
+}

@@ -1,0 +1,148 @@
+//! `gait run` end to end on the bundled real walking video, with the default
+//! pipeline and the real BlazePose model.
+
+mod common;
+
+use common::{gait, models_dir, read_json, run_ok, sample_video};
+use std::path::Path;
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+
+const NAMES: [&str; 15] = [
+    "nose", "neck", "left_shoulder", "right_shoulder", "mid_hip", "left_hip", "right_hip", "left_knee", "right_knee",
+    "left_ankle", "right_ankle", "left_heel", "right_heel", "left_toe", "right_toe",
+];
+
+fn run_args(out: &Path, first: usize, last: usize) -> std::process::Command {
+    let mut cmd = gait();
+    cmd.args(["run", "--no-progress", "--models-dir"])
+        .arg(models_dir())
+        .arg("--input")
+        .arg(sample_video())
+        .arg("--out")
+        .arg(out)
+        .args(["--set", &format!("input.first_frame={first}"), "--set", &format!("input.last_frame={last}")]);
+    cmd
+}
+
+/// Data rows of keypoints.csv: (frame, values).
+fn rows(csv: &Path) -> Vec<(usize, Vec<String>)> {
+    let text = std::fs::read_to_string(csv).unwrap();
+    text.lines()
+        .skip(3)
+        .map(|l| {
+            let mut cells = l.split(',');
+            let frame = cells.next().unwrap().parse().unwrap();
+            (frame, cells.map(str::to_string).collect())
+        })
+        .collect()
+}
+
+#[test]
+fn default_pipeline_on_the_sample_video() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    run_ok(&mut run_args(&out, 150, 157));
+
+    let text = std::fs::read_to_string(out.join("keypoints.csv")).unwrap();
+    let header: Vec<Vec<&str>> = text.lines().take(3).map(|l| l.split(',').collect()).collect();
+    assert_eq!(header[0][0], "scorer");
+    assert_eq!(header[1][0], "bodyparts");
+    assert_eq!(header[2][0], "coords");
+    for (i, name) in NAMES.iter().enumerate() {
+        assert_eq!(header[1][1 + 3 * i], *name);
+        assert_eq!(&header[2][1 + 3 * i..4 + 3 * i], ["x", "y", "likelihood"]);
+    }
+    let data = rows(&out.join("keypoints.csv"));
+    assert_eq!(data.iter().map(|r| r.0).collect::<Vec<_>>(), (150..=157).collect::<Vec<_>>());
+    // The walker is in view: her knees and ankles are found inside the frame.
+    for (frame, cells) in &data {
+        for name in ["left_knee", "right_knee", "left_ankle", "right_ankle"] {
+            let i = NAMES.iter().position(|n| *n == name).unwrap();
+            let x: f64 = cells[3 * i].parse().unwrap_or_else(|_| panic!("frame {frame}: no {name}"));
+            let y: f64 = cells[3 * i + 1].parse().unwrap();
+            assert!((0.0..1768.0).contains(&x) && (0.0..994.0).contains(&y), "frame {frame} {name} at {x},{y}");
+        }
+    }
+
+    let manifest = read_json(&out.join("run.json"));
+    assert_eq!(manifest["frames_processed"], 8);
+    assert_eq!(manifest["input"]["fps"], 30.0);
+    assert_eq!(manifest["config"]["pose"]["kind"], "blazepose");
+    assert!(manifest["models"].as_array().unwrap().iter().all(|m| m["sha256"].as_str().is_some_and(|s| s.len() == 64)));
+    assert!(manifest["stages"]["pose"]["seconds"].as_f64().unwrap() > 0.0);
+
+    // run.json repeats the run: same keypoints, all from the cache.
+    let again = dir.path().join("again");
+    run_ok(
+        gait()
+            .args(["run", "--no-progress", "--models-dir"])
+            .arg(models_dir())
+            .arg("--config")
+            .arg(out.join("run.json"))
+            .arg("--input")
+            .arg(sample_video())
+            .arg("--out")
+            .arg(&again)
+            .args(["--set", &format!("run.cache_dir={}", out.join("cache").display())]),
+    );
+    assert_eq!(read_json(&again.join("run.json"))["frames_from_cache"], 8);
+    assert_eq!(rows(&again.join("keypoints.csv")), data);
+}
+
+#[test]
+fn interrupted_run_resumes_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let mut child = run_args(&out, 100, 139)
+        .args(["--set", "run.batch_size=1"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Kill the run hard once a few frames are done.
+    let deadline = Instant::now() + Duration::from_secs(600);
+    let done = |out: &Path| -> usize {
+        std::fs::read_dir(out.join("cache"))
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with("pose-"))
+            .flat_map(|e| std::fs::read_dir(e.path()).into_iter().flatten().flatten())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".json") && e.file_name() != "config.json")
+            .count()
+    };
+    while done(&out) < 5 {
+        assert!(Instant::now() < deadline, "no progress");
+        assert!(child.try_wait().unwrap().is_none(), "the run ended before it could be interrupted");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let finished_before = done(&out);
+    assert!(finished_before < 40, "the run finished before it was killed");
+    assert!(!out.join("keypoints.csv").exists(), "an interrupted run must not leave results");
+
+    run_ok(&mut run_args(&out, 100, 139));
+    let manifest = read_json(&out.join("run.json"));
+    assert_eq!(manifest["frames_processed"], 40);
+    let from_cache = manifest["frames_from_cache"].as_u64().unwrap() as usize;
+    assert!(from_cache >= 5 && from_cache >= finished_before - 1, "resumed with {from_cache} cached frames");
+    assert_eq!(manifest["stages"]["pose"]["computed"].as_u64().unwrap() as usize, 40 - from_cache);
+
+    // Same keypoints as an uninterrupted run without a cache.
+    let clean = dir.path().join("clean");
+    run_ok(run_args(&clean, 100, 139).args(["--set", "run.cache=false"]));
+    let (a, b) = (rows(&out.join("keypoints.csv")), rows(&clean.join("keypoints.csv")));
+    assert_eq!(a.len(), b.len());
+    for ((fa, ca), (fb, cb)) in a.iter().zip(&b) {
+        assert_eq!(fa, fb);
+        for (x, y) in ca.iter().zip(cb) {
+            match (x.parse::<f64>(), y.parse::<f64>()) {
+                // Tracking restarts at the resume point, so a frame can differ slightly.
+                (Ok(x), Ok(y)) => assert!((x - y).abs() < 3.0, "frame {fa}: {x} vs {y}"),
+                _ => assert_eq!(x.is_empty(), y.is_empty(), "frame {fa}"),
+            }
+        }
+    }
+}
