@@ -41,6 +41,17 @@ fn columns(seq: &PoseSequence, map: &BTreeMap<String, String>, what: &str) -> Re
     Ok(out)
 }
 
+/// `seq` with its keypoints renamed to canonical names where they have one
+/// (see [`to_canonical`]), so that gait-kin finds them.
+pub fn canonicalize(seq: &PoseSequence, map: &BTreeMap<String, String>) -> Result<PoseSequence, EvalError> {
+    let cols = columns(seq, map, "input")?;
+    let mut out = seq.clone();
+    for (canonical, (i, _)) in cols {
+        out.names[i] = canonical;
+    }
+    Ok(out)
+}
+
 fn frame_index(seq: &PoseSequence, what: &str) -> Result<HashMap<usize, usize>, EvalError> {
     let mut idx = HashMap::with_capacity(seq.frames.len());
     for (row, &f) in seq.frames.iter().enumerate() {

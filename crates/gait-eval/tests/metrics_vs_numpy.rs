@@ -96,3 +96,23 @@ fn writes_metrics_files_in_the_table_layout() {
     let json: Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("metrics.json")).unwrap()).unwrap();
     assert_eq!(json["failures"]["swapped"]["frames"], 3);
 }
+
+#[test]
+fn kinematics_through_gait_kin() {
+    let truth = read_poses(&fixture("truth.csv"), 30.0, None).unwrap();
+    let pred = read_poses(&fixture("pred_openpose"), 30.0, None).unwrap();
+    let (post, kin) = (gait_kin::PostprocessConfig::default(), gait_kin::KinematicsConfig::default());
+    let opts = EvalOptions::default();
+    let same = gait_eval::evaluate(&truth, &truth, &post, &kin, &opts).unwrap();
+    let k = same.kinematics.as_ref().unwrap();
+    for j in &k.joints {
+        assert!(j.deg.n > 40, "{}: angles defined in most frames ({} of 60)", j.joint, j.deg.n);
+        assert_eq!(j.deg.mean, Some(0.0), "{}: truth against itself", j.joint);
+    }
+    let e = gait_eval::evaluate(&truth, &pred, &post, &kin, &opts).unwrap();
+    let k = e.kinematics.as_ref().unwrap();
+    for l in &k.legs {
+        let m = l.stat.mean.unwrap();
+        assert!(m > 0.0 && m < 30.0, "{:?} leg angle MAE {m}", l.side);
+    }
+}
