@@ -1,0 +1,132 @@
+//! Gait cycles (heel strike to next heel strike of the same foot), time-normalised to 0..100 %.
+
+use serde::Serialize;
+
+use crate::angles::Angles;
+use crate::config::Side;
+use crate::events::{Event, EventKind};
+
+/// Joints in output order.
+pub const JOINTS: [&str; 3] = ["hip", "knee", "ankle"];
+
+/// A stride of one foot: first and next heel strike (input frame numbers).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Stride {
+    pub side: Side,
+    pub start: usize,
+    pub end: usize,
+}
+
+/// Mean and SD curves of one joint of one side over its complete cycles (101 points each).
+#[derive(Debug, Clone, Serialize)]
+pub struct CycleCurve {
+    pub side: Side,
+    pub joint: &'static str,
+    #[serde(skip)]
+    pub mean: Vec<f64>,
+    #[serde(skip)]
+    pub sd: Vec<f64>,
+    pub n_cycles: usize,
+}
+
+/// Consecutive heel strikes of each foot whose duration lies within `[min_s, max_s]`.
+pub fn strides(events: &[Event], fps: f64, min_s: f64, max_s: f64) -> Vec<Stride> {
+    let mut out = Vec::new();
+    for side in Side::BOTH {
+        let hs: Vec<usize> = events
+            .iter()
+            .filter(|e| e.side == side && e.event == EventKind::HeelStrike)
+            .map(|e| e.frame)
+            .collect();
+        for w in hs.windows(2) {
+            let dur = (w[1] - w[0]) as f64 / fps;
+            if dur >= min_s && dur <= max_s {
+                out.push(Stride { side, start: w[0], end: w[1] });
+            }
+        }
+    }
+    out
+}
+
+/// `series` (indexed from `first_frame`) resampled linearly at 101 points over the stride;
+/// `None` when any needed sample is missing.
+pub fn resample(series: &[f64], first_frame: usize, s: &Stride) -> Option<Vec<f64>> {
+    let (a, b) = (s.start.checked_sub(first_frame)?, s.end.checked_sub(first_frame)?);
+    if b >= series.len() || b <= a {
+        return None;
+    }
+    let span = (b - a) as f64;
+    (0..=100)
+        .map(|p| {
+            let pos = a as f64 + span * p as f64 / 100.0;
+            let i = pos.floor() as usize;
+            let f = pos - i as f64;
+            let lo = series[i];
+            let v = if f == 0.0 { lo } else { lo * (1.0 - f) + series[(i + 1).min(b)] * f };
+            v.is_finite().then_some(v)
+        })
+        .collect()
+}
+
+/// Mean and sample SD per joint and side over complete strides; a side with fewer than
+/// `min_cycles` complete strides for a joint gets no curve and a warning.
+pub fn curves(
+    angles: &Angles,
+    first_frame: usize,
+    strides: &[Stride],
+    min_cycles: usize,
+    warnings: &mut Vec<String>,
+) -> Vec<CycleCurve> {
+    let mut out = Vec::new();
+    for side in Side::BOTH {
+        let leg = angles.leg(side);
+        for (joint, series) in JOINTS.iter().zip([&leg.hip, &leg.knee, &leg.ankle]) {
+            let cycles: Vec<Vec<f64>> = strides
+                .iter()
+                .filter(|s| s.side == side)
+                .filter_map(|s| resample(series, first_frame, s))
+                .collect();
+            let n = cycles.len();
+            if n < min_cycles.max(1) {
+                warnings.push(format!(
+                    "fewer than {} complete cycles for the {} {} ({n} found): no mean curve",
+                    min_cycles.max(1),
+                    side.name(),
+                    joint
+                ));
+                continue;
+            }
+            let mean: Vec<f64> = (0..=100).map(|p| cycles.iter().map(|c| c[p]).sum::<f64>() / n as f64).collect();
+            let sd = (0..=100)
+                .map(|p| {
+                    if n < 2 {
+                        return f64::NAN;
+                    }
+                    let ss: f64 = cycles.iter().map(|c| (c[p] - mean[p]).powi(2)).sum();
+                    (ss / (n - 1) as f64).sqrt()
+                })
+                .collect();
+            out.push(CycleCurve { side, joint, mean, sd, n_cycles: n });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strides_and_resampling() {
+        let hs = |side, frame| Event { side, event: EventKind::HeelStrike, frame };
+        let ev = [hs(Side::Left, 10), hs(Side::Left, 40), hs(Side::Left, 200), hs(Side::Right, 25)];
+        let s = strides(&ev, 30.0, 0.5, 3.0);
+        assert_eq!(s, vec![Stride { side: Side::Left, start: 10, end: 40 }]);
+        let series: Vec<f64> = (0..50).map(|i| i as f64).collect();
+        let r = resample(&series, 5, &s[0]).unwrap();
+        assert_eq!((r[0], r[50], r[100]), (5.0, 20.0, 35.0));
+        let mut gap = series.clone();
+        gap[20] = f64::NAN;
+        assert!(resample(&gap, 5, &s[0]).is_none());
+    }
+}

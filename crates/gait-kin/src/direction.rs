@@ -1,0 +1,122 @@
+//! Walking direction per frame, side view check, and the leg nearer the camera.
+
+use serde::Serialize;
+
+use crate::config::Side;
+use crate::tracks::Tracks;
+
+/// Direction of travel in the image, per frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Direction {
+    /// Walking towards +x (image right).
+    Right,
+    /// Walking towards -x (image left).
+    Left,
+    /// Not known: nothing seen, standing with no foot visible, or not a side view.
+    Unknown,
+}
+
+impl Direction {
+    /// +1, -1 or 0: multiplies image x to get "forward".
+    pub fn sign(self) -> f64 {
+        match self {
+            Direction::Right => 1.0,
+            Direction::Left => -1.0,
+            Direction::Unknown => 0.0,
+        }
+    }
+
+    /// The leg nearer the camera. With image x right and y down the camera looks along +z, so a
+    /// person walking to image right has their left side away from the camera: the right leg is
+    /// nearer (and vice versa). Assumes the person faces where they walk and the video is not
+    /// mirrored.
+    pub fn near_side(self) -> Option<Side> {
+        match self {
+            Direction::Right => Some(Side::Right),
+            Direction::Left => Some(Side::Left),
+            Direction::Unknown => None,
+        }
+    }
+}
+
+/// Per-frame direction and whether the frame is a side (sagittal) view.
+#[derive(Debug, Clone)]
+pub struct Directions {
+    pub per_frame: Vec<Direction>,
+    /// Frames where the hips are far apart horizontally: the person faces or backs the camera.
+    pub frontal: Vec<bool>,
+}
+
+/// Walking direction from the pelvis' horizontal velocity (over +-0.1 s) when it moves faster
+/// than 0.2 leg lengths per second, otherwise from which way the feet point (heel -> toe);
+/// then a majority vote over +-0.25 s removes flicker. Frames whose hip width exceeds half
+/// the thigh length are taken as frontal views and get no direction.
+pub fn detect(t: &Tracks) -> Directions {
+    let n = t.len();
+    let leg = t.leg_length();
+    let fps = t.fps;
+    let w = ((0.1 * fps).round() as usize).max(1);
+    let hips = [Side::Left, Side::Right].map(|s| t.leg_index(s, "hip"));
+    let knees = [Side::Left, Side::Right].map(|s| t.leg_index(s, "knee"));
+    let mut frontal = vec![false; n];
+    let mut raw = vec![0.0f64; n];
+    for i in 0..n {
+        if let ([Some(lh), Some(rh)], [Some(lk), Some(rk)]) = (hips, knees)
+            && let (Some(a), Some(b)) = (t.at(lh, i), t.at(rh, i))
+        {
+            let thigh = [(lh, lk), (rh, rk)]
+                .iter()
+                .filter_map(|&(h, k)| Some(crate::tracks::dist(t.at(h, i)?, t.at(k, i)?)))
+                .fold(0.0, f64::max);
+            let thigh = if thigh > 0.0 { thigh } else { leg / 2.0 };
+            frontal[i] = (a.0 - b.0).abs() > 0.5 * thigh;
+        }
+        if frontal[i] {
+            continue;
+        }
+        let lo = i.saturating_sub(w);
+        let hi = (i + w).min(n.saturating_sub(1));
+        if let (Some(a), Some(b)) = (t.pelvis(lo), t.pelvis(hi))
+            && hi > lo
+        {
+            let v = (b.0 - a.0) / ((hi - lo) as f64 / fps);
+            if leg.is_finite() && v.abs() > 0.2 * leg {
+                raw[i] = v.signum();
+                continue;
+            }
+        }
+        let mut foot = 0.0;
+        for side in Side::BOTH {
+            if let (Some(h), Some(k)) = (t.leg_index(side, "heel"), t.leg_index(side, "toe"))
+                && let (Some(a), Some(b)) = (t.at(h, i), t.at(k, i))
+            {
+                foot += (b.0 - a.0).signum();
+            }
+        }
+        raw[i] = foot.signum();
+    }
+    let half = ((0.25 * fps).round() as usize).max(1);
+    let per_frame = (0..n)
+        .map(|i| {
+            if frontal[i] || raw[i] == 0.0 {
+                return Direction::Unknown;
+            }
+            let lo = i.saturating_sub(half);
+            let hi = (i + half + 1).min(n);
+            let vote: f64 = raw[lo..hi].iter().sum();
+            match vote {
+                v if v > 0.0 => Direction::Right,
+                v if v < 0.0 => Direction::Left,
+                _ => {
+                    if raw[i] > 0.0 {
+                        Direction::Right
+                    } else {
+                        Direction::Left
+                    }
+                }
+            }
+        })
+        .collect();
+    Directions { per_frame, frontal }
+}

@@ -1,0 +1,95 @@
+//! The CSV files of `gait kin`, each written to a temporary name and renamed when complete.
+
+use std::fs;
+use std::io::Write;
+use std::path::Path;
+
+use crate::{KinError, KinResult};
+
+/// Number cell: empty when undefined.
+fn num(v: f64) -> String {
+    if v.is_finite() { format!("{v:.6}") } else { String::new() }
+}
+
+/// Writes `name` in `dir` through `dir/.name.partial`, so a crash never leaves a complete-looking file.
+fn atomic(dir: &Path, name: &str, fill: impl FnOnce(&mut Vec<u8>) -> Result<(), KinError>) -> Result<(), KinError> {
+    let io = |what: String| move |e: std::io::Error| KinError::Io { context: what, source: e };
+    let mut buf = Vec::new();
+    fill(&mut buf)?;
+    let tmp = dir.join(format!(".{name}.partial"));
+    let dst = dir.join(name);
+    let mut f = fs::File::create(&tmp).map_err(io(format!("creating {}", tmp.display())))?;
+    f.write_all(&buf).map_err(io(format!("writing {}", tmp.display())))?;
+    f.sync_all().map_err(io(format!("writing {}", tmp.display())))?;
+    fs::rename(&tmp, &dst).map_err(io(format!("renaming to {}", dst.display())))
+}
+
+fn lines(buf: &mut Vec<u8>, rows: impl IntoIterator<Item = String>) {
+    for r in rows {
+        buf.extend_from_slice(r.as_bytes());
+        buf.push(b'\n');
+    }
+}
+
+/// Writes angles.csv, events.csv, cycles.csv, spatiotemporal.csv and keypoints_filtered.csv.
+pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
+    fs::create_dir_all(out_dir).map_err(|e| KinError::Io { context: format!("creating {}", out_dir.display()), source: e })?;
+    let fps = r.fps;
+    atomic(out_dir, "angles.csv", |b| {
+        let a = &r.angles;
+        lines(b, ["frame,time_s,left_hip,right_hip,left_knee,right_knee,left_ankle,right_ankle".to_string()]);
+        lines(
+            b,
+            (0..a.left.hip.len()).map(|i| {
+                let f = r.first_frame + i;
+                let cols = [&a.left.hip, &a.right.hip, &a.left.knee, &a.right.knee, &a.left.ankle, &a.right.ankle];
+                let mut row = format!("{f},{}", num(f as f64 / fps));
+                for c in cols {
+                    row.push(',');
+                    row.push_str(&num(c[i]));
+                }
+                row
+            }),
+        );
+        Ok(())
+    })?;
+    atomic(out_dir, "events.csv", |b| {
+        lines(b, ["side,event,frame,time_s".to_string()]);
+        lines(
+            b,
+            r.events
+                .iter()
+                .map(|e| format!("{},{},{},{}", e.side.name(), e.event.name(), e.frame, num(e.frame as f64 / fps))),
+        );
+        Ok(())
+    })?;
+    atomic(out_dir, "cycles.csv", |b| {
+        lines(b, ["side,joint,percent,mean,sd,n_cycles".to_string()]);
+        for c in &r.cycles {
+            lines(
+                b,
+                (0..c.mean.len()).map(|p| {
+                    format!("{},{},{p},{},{},{}", c.side.name(), c.joint, num(c.mean[p]), num(c.sd[p]), c.n_cycles)
+                }),
+            );
+        }
+        Ok(())
+    })?;
+    atomic(out_dir, "spatiotemporal.csv", |b| {
+        lines(b, ["parameter,side,mean,sd,n,unit".to_string()]);
+        lines(
+            b,
+            r.spatiotemporal
+                .iter()
+                .map(|p| format!("{},{},{},{},{},{}", p.parameter, p.side, num(p.mean), num(p.sd), p.n, p.unit)),
+        );
+        Ok(())
+    })?;
+    atomic(out_dir, "keypoints_filtered.csv", |b| {
+        gait_core::dlc::write(&mut *b, "gait-kin", &r.filtered).map_err(|e| KinError::Io {
+            context: "writing keypoints_filtered.csv".into(),
+            source: std::io::Error::other(e.to_string()),
+        })
+    })?;
+    Ok(())
+}
