@@ -26,7 +26,11 @@ pub struct Aligned {
 }
 
 /// Canonical name -> column, rejecting two columns that map to one name.
-fn columns(seq: &PoseSequence, map: &BTreeMap<String, String>, what: &str) -> Result<BTreeMap<String, (usize, String)>, EvalError> {
+fn columns(
+    seq: &PoseSequence,
+    map: &BTreeMap<String, String>,
+    what: &str,
+) -> Result<BTreeMap<String, (usize, String)>, EvalError> {
     let mut out: BTreeMap<String, (usize, String)> = BTreeMap::new();
     for (i, name) in seq.names.iter().enumerate() {
         if let Some(c) = to_canonical(name, map) {
@@ -43,7 +47,10 @@ fn columns(seq: &PoseSequence, map: &BTreeMap<String, String>, what: &str) -> Re
 
 /// `seq` with its keypoints renamed to canonical names where they have one
 /// (see [`to_canonical`]), so that gait-kin finds them.
-pub fn canonicalize(seq: &PoseSequence, map: &BTreeMap<String, String>) -> Result<PoseSequence, EvalError> {
+pub fn canonicalize(
+    seq: &PoseSequence,
+    map: &BTreeMap<String, String>,
+) -> Result<PoseSequence, EvalError> {
     let cols = columns(seq, map, "input")?;
     let mut out = seq.clone();
     for (canonical, (i, _)) in cols {
@@ -72,7 +79,11 @@ fn span(frames: &[usize]) -> String {
 /// Aligns `truth` and `pred` by frame index and by canonical name (through
 /// `map`, then common spellings; see [`to_canonical`]). Fails, saying what
 /// does not match, when they share no frame or no lower-limb keypoint.
-pub fn align(truth: &PoseSequence, pred: &PoseSequence, map: &BTreeMap<String, String>) -> Result<Aligned, EvalError> {
+pub fn align(
+    truth: &PoseSequence,
+    pred: &PoseSequence,
+    map: &BTreeMap<String, String>,
+) -> Result<Aligned, EvalError> {
     let tc = columns(truth, map, "ground-truth")?;
     let pc = columns(pred, map, "prediction")?;
     let names: Vec<String> = CANONICAL
@@ -80,7 +91,10 @@ pub fn align(truth: &PoseSequence, pred: &PoseSequence, map: &BTreeMap<String, S
         .filter(|n| tc.contains_key(**n) && pc.contains_key(**n))
         .map(|n| n.to_string())
         .collect();
-    if !names.iter().any(|n| crate::names::Side::of(n).is_some() && !n.ends_with("shoulder")) {
+    if !names
+        .iter()
+        .any(|n| crate::names::Side::of(n).is_some() && !n.ends_with("shoulder"))
+    {
         return Err(EvalError::Mismatch(format!(
             "no lower-limb keypoint in common; ground truth has [{}], prediction has [{}] \
              (map names with `name_map`, e.g. \"RKnee\" = \"right_knee\")",
@@ -91,7 +105,9 @@ pub fn align(truth: &PoseSequence, pred: &PoseSequence, map: &BTreeMap<String, S
     let mut unmatched_names: Vec<String> = Vec::new();
     for (seq, cols) in [(truth, &tc), (pred, &pc)] {
         for name in &seq.names {
-            let used = cols.iter().any(|(c, (_, n))| n == name && names.contains(c));
+            let used = cols
+                .iter()
+                .any(|(c, (_, n))| n == name && names.contains(c));
             if !used && !unmatched_names.contains(name) {
                 unmatched_names.push(name.clone());
             }
@@ -99,7 +115,12 @@ pub fn align(truth: &PoseSequence, pred: &PoseSequence, map: &BTreeMap<String, S
     }
     let tf = frame_index(truth, "ground truth")?;
     let pf = frame_index(pred, "the prediction")?;
-    let frames: Vec<usize> = truth.frames.iter().copied().filter(|f| pf.contains_key(f)).collect();
+    let frames: Vec<usize> = truth
+        .frames
+        .iter()
+        .copied()
+        .filter(|f| pf.contains_key(f))
+        .collect();
     if frames.is_empty() {
         return Err(EvalError::Mismatch(format!(
             "no common frame index: ground truth has {}, prediction has {}",
@@ -107,14 +128,31 @@ pub fn align(truth: &PoseSequence, pred: &PoseSequence, map: &BTreeMap<String, S
             span(&pred.frames)
         )));
     }
-    let truth_only_frames = truth.frames.iter().copied().filter(|f| !pf.contains_key(f)).collect();
-    let pred_only_frames = pred.frames.iter().copied().filter(|f| !tf.contains_key(f)).collect();
-    let pick = |seq: &PoseSequence, cols: &BTreeMap<String, (usize, String)>, row: usize| -> Vec<Keypoint> {
+    let truth_only_frames = truth
+        .frames
+        .iter()
+        .copied()
+        .filter(|f| !pf.contains_key(f))
+        .collect();
+    let pred_only_frames = pred
+        .frames
+        .iter()
+        .copied()
+        .filter(|f| !tf.contains_key(f))
+        .collect();
+    let pick = |seq: &PoseSequence,
+                cols: &BTreeMap<String, (usize, String)>,
+                row: usize|
+     -> Vec<Keypoint> {
         names
             .iter()
             .map(|n| {
                 let col = cols[n].0;
-                seq.poses[row].keypoints.get(col).copied().unwrap_or_else(Keypoint::missing)
+                seq.poses[row]
+                    .keypoints
+                    .get(col)
+                    .copied()
+                    .unwrap_or_else(Keypoint::missing)
             })
             .collect()
     };
@@ -145,7 +183,9 @@ mod tests {
             poses: frames
                 .iter()
                 .map(|&f| Pose {
-                    keypoints: (0..names.len()).map(|k| Keypoint::new(f as f64, k as f64, 1.0)).collect(),
+                    keypoints: (0..names.len())
+                        .map(|k| Keypoint::new(f as f64, k as f64, 1.0))
+                        .collect(),
                 })
                 .collect(),
         }
@@ -162,21 +202,36 @@ mod tests {
         assert_eq!(a.pred[0][0], Keypoint::new(2.0, 1.0, 1.0));
         assert_eq!(a.pred[1][1], Keypoint::new(3.0, 2.0, 1.0));
         assert_eq!(a.pred_only_frames, vec![0, 1, 5]);
-        assert!(a.unmatched_names.contains(&"tail".to_string()) && a.unmatched_names.contains(&"nose".to_string()));
+        assert!(
+            a.unmatched_names.contains(&"tail".to_string())
+                && a.unmatched_names.contains(&"nose".to_string())
+        );
     }
 
     #[test]
     fn says_what_does_not_match() {
         let truth = seq(&["paw", "tail"], &[0]);
         let pred = seq(&["left_knee"], &[0]);
-        let e = align(&truth, &pred, &BTreeMap::new()).unwrap_err().to_string();
+        let e = align(&truth, &pred, &BTreeMap::new())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("paw, tail") && e.contains("name_map"), "{e}");
         let map = BTreeMap::from([("paw".to_string(), "left_knee".to_string())]);
         assert!(align(&truth, &pred, &map).is_ok());
         let late = seq(&["left_knee"], &[10, 11]);
-        let e = align(&pred, &late, &BTreeMap::new()).unwrap_err().to_string();
-        assert!(e.contains("frames 0..=0") && e.contains("frames 10..=11"), "{e}");
+        let e = align(&pred, &late, &BTreeMap::new())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("frames 0..=0") && e.contains("frames 10..=11"),
+            "{e}"
+        );
         let twice = seq(&["RKnee", "knee_r"], &[0]);
-        assert!(align(&twice, &pred, &BTreeMap::new()).unwrap_err().to_string().contains("both map"));
+        assert!(
+            align(&twice, &pred, &BTreeMap::new())
+                .unwrap_err()
+                .to_string()
+                .contains("both map")
+        );
     }
 }

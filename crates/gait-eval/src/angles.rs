@@ -15,7 +15,14 @@ use crate::options::{EvalOptions, Role};
 use crate::stats::Stat;
 
 /// Angle columns, in the order of `angles.csv`.
-pub const ANGLE_COLUMNS: [&str; 6] = ["left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle"];
+pub const ANGLE_COLUMNS: [&str; 6] = [
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_ankle",
+    "right_ankle",
+];
 
 /// Sagittal joint angles in degrees per frame (NaN where undefined).
 #[derive(Debug, Clone, PartialEq)]
@@ -36,16 +43,32 @@ impl AngleTable {
 /// Reads an `angles.csv` (`frame,time_s,left_hip,...,right_ankle`, empty cells undefined).
 pub fn read_angles_csv(path: &Path) -> Result<AngleTable, EvalError> {
     let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
-    let header: Vec<String> = r.headers().map_err(|e| EvalError::input(path, e))?.iter().map(str::to_string).collect();
+    let header: Vec<String> = r
+        .headers()
+        .map_err(|e| EvalError::input(path, e))?
+        .iter()
+        .map(str::to_string)
+        .collect();
     let find = |name: &str| {
-        header
-            .iter()
-            .position(|h| h == name)
-            .ok_or_else(|| EvalError::input(path, format!("no `{name}` column; expected frame,time_s,{}", ANGLE_COLUMNS.join(","))))
+        header.iter().position(|h| h == name).ok_or_else(|| {
+            EvalError::input(
+                path,
+                format!(
+                    "no `{name}` column; expected frame,time_s,{}",
+                    ANGLE_COLUMNS.join(",")
+                ),
+            )
+        })
     };
     let frame_col = find("frame")?;
-    let cols: Vec<usize> = ANGLE_COLUMNS.iter().map(|n| find(n)).collect::<Result<_, _>>()?;
-    let mut table = AngleTable { frames: Vec::new(), values: Vec::new() };
+    let cols: Vec<usize> = ANGLE_COLUMNS
+        .iter()
+        .map(|n| find(n))
+        .collect::<Result<_, _>>()?;
+    let mut table = AngleTable {
+        frames: Vec::new(),
+        values: Vec::new(),
+    };
     for (i, rec) in r.records().enumerate() {
         let rec = rec.map_err(|e| EvalError::input(path, e))?;
         let line = i + 2;
@@ -54,12 +77,18 @@ pub fn read_angles_csv(path: &Path) -> Result<AngleTable, EvalError> {
             if s.is_empty() || s.eq_ignore_ascii_case("nan") {
                 return Ok(f64::NAN);
             }
-            s.parse().map_err(|_| EvalError::input(path, format!("line {line}: `{s}` is not a number")))
+            s.parse()
+                .map_err(|_| EvalError::input(path, format!("line {line}: `{s}` is not a number")))
         };
         let frame = rec
             .get(frame_col)
             .and_then(|s| s.trim().parse().ok())
-            .ok_or_else(|| EvalError::input(path, format!("line {line}: the frame is not a whole number")))?;
+            .ok_or_else(|| {
+                EvalError::input(
+                    path,
+                    format!("line {line}: the frame is not a whole number"),
+                )
+            })?;
         let mut v = [f64::NAN; 6];
         for (slot, &c) in v.iter_mut().zip(&cols) {
             *slot = cell(c)?;
@@ -89,11 +118,27 @@ pub struct KinematicsErrors {
 
 /// Absolute differences of `pred` and `truth` angles on their common frames
 /// where both are defined.
-pub fn angle_errors(truth: &AngleTable, pred: &AngleTable, opts: &EvalOptions) -> Result<KinematicsErrors, EvalError> {
-    let rows: HashMap<usize, usize> = pred.frames.iter().enumerate().map(|(i, &f)| (f, i)).collect();
-    let pairs: Vec<(usize, usize)> = truth.frames.iter().enumerate().filter_map(|(i, f)| Some((i, *rows.get(f)?))).collect();
+pub fn angle_errors(
+    truth: &AngleTable,
+    pred: &AngleTable,
+    opts: &EvalOptions,
+) -> Result<KinematicsErrors, EvalError> {
+    let rows: HashMap<usize, usize> = pred
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, &f)| (f, i))
+        .collect();
+    let pairs: Vec<(usize, usize)> = truth
+        .frames
+        .iter()
+        .enumerate()
+        .filter_map(|(i, f)| Some((i, *rows.get(f)?)))
+        .collect();
     if pairs.is_empty() {
-        return Err(EvalError::Mismatch("the angle tables of ground truth and prediction share no frame".into()));
+        return Err(EvalError::Mismatch(
+            "the angle tables of ground truth and prediction share no frame".into(),
+        ));
     }
     let diffs = |c: usize| -> Vec<f64> {
         pairs
@@ -102,7 +147,13 @@ pub fn angle_errors(truth: &AngleTable, pred: &AngleTable, opts: &EvalOptions) -
             .filter(|d| d.is_finite())
             .collect()
     };
-    let side_of = |c: usize| if ANGLE_COLUMNS[c].starts_with("left") { Side::Left } else { Side::Right };
+    let side_of = |c: usize| {
+        if ANGLE_COLUMNS[c].starts_with("left") {
+            Side::Left
+        } else {
+            Side::Right
+        }
+    };
     let joints = (0..6)
         .map(|c| JointError {
             joint: ANGLE_COLUMNS[c].to_string(),
@@ -114,8 +165,15 @@ pub fn angle_errors(truth: &AngleTable, pred: &AngleTable, opts: &EvalOptions) -
     let legs = Side::BOTH
         .iter()
         .map(|&side| {
-            let pooled: Vec<f64> = (0..6).filter(|&c| side_of(c) == side).flat_map(diffs).collect();
-            crate::keypoint_error::LegError { side, role: opts.role(side), stat: Stat::of(&pooled) }
+            let pooled: Vec<f64> = (0..6)
+                .filter(|&c| side_of(c) == side)
+                .flat_map(diffs)
+                .collect();
+            crate::keypoint_error::LegError {
+                side,
+                role: opts.role(side),
+                stat: Stat::of(&pooled),
+            }
         })
         .collect();
     Ok(KinematicsErrors { joints, legs })
@@ -137,10 +195,18 @@ mod tests {
         pred.values[1][3] = 1.0;
         let e = angle_errors(&t, &pred, &EvalOptions::default()).unwrap();
         let rk = &e.joints[3];
-        assert_eq!((rk.joint.as_str(), rk.role, rk.deg.n, rk.deg.mean), ("right_knee", Role::Prosthetic, 2, Some(4.5)));
+        assert_eq!(
+            (rk.joint.as_str(), rk.role, rk.deg.n, rk.deg.mean),
+            ("right_knee", Role::Prosthetic, 2, Some(4.5))
+        );
         assert_eq!(e.joints[0].deg.n, 1);
         assert_eq!(e.legs[1].stat.n, 6);
         std::fs::write(&p, "frame,left_hip\n0,1\n").unwrap();
-        assert!(read_angles_csv(&p).unwrap_err().to_string().contains("right_hip"));
+        assert!(
+            read_angles_csv(&p)
+                .unwrap_err()
+                .to_string()
+                .contains("right_hip")
+        );
     }
 }

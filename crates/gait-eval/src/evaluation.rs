@@ -27,7 +27,11 @@ pub struct Evaluation {
 
 fn list(frames: &[usize]) -> String {
     let shown: Vec<String> = frames.iter().take(10).map(usize::to_string).collect();
-    let more = if frames.len() > 10 { format!(", ... ({} in all)", frames.len()) } else { String::new() };
+    let more = if frames.len() > 10 {
+        format!(", ... ({} in all)", frames.len())
+    } else {
+        String::new()
+    };
     format!("{}{more}", shown.join(", "))
 }
 
@@ -46,16 +50,28 @@ pub fn evaluate_with_angles(
     let kinematics = angles.map(|(t, p)| angle_errors(t, p, opts)).transpose()?;
     let mut warnings = Vec::new();
     if !a.truth_only_frames.is_empty() {
-        warnings.push(format!("ground-truth frames without a prediction (not evaluated): {}", list(&a.truth_only_frames)));
+        warnings.push(format!(
+            "ground-truth frames without a prediction (not evaluated): {}",
+            list(&a.truth_only_frames)
+        ));
     }
     if !a.pred_only_frames.is_empty() {
-        warnings.push(format!("{} predicted frames have no ground truth and were not evaluated", a.pred_only_frames.len()));
+        warnings.push(format!(
+            "{} predicted frames have no ground truth and were not evaluated",
+            a.pred_only_frames.len()
+        ));
     }
     if !a.unmatched_names.is_empty() {
-        warnings.push(format!("keypoints not compared (no counterpart): {}", a.unmatched_names.join(", ")));
+        warnings.push(format!(
+            "keypoints not compared (no counterpart): {}",
+            a.unmatched_names.join(", ")
+        ));
     }
     if !failures.swapped_frames.is_empty() {
-        warnings.push(format!("left/right legs swapped in frames {}", list(&failures.swapped_frames)));
+        warnings.push(format!(
+            "left/right legs swapped in frames {}",
+            list(&failures.swapped_frames)
+        ));
     }
     Ok(Evaluation {
         options: opts.clone(),

@@ -95,7 +95,14 @@ fn reference_length(a: &Aligned, opts: &EvalOptions) -> Result<f64, EvalError> {
 }
 
 fn count(frames: usize, total: usize) -> Count {
-    Count { frames, percent: if total == 0 { 0.0 } else { 100.0 * frames as f64 / total as f64 } }
+    Count {
+        frames,
+        percent: if total == 0 {
+            0.0
+        } else {
+            100.0 * frames as f64 / total as f64
+        },
+    }
 }
 
 pub(crate) fn failures(a: &Aligned, opts: &EvalOptions) -> Result<Failures, EvalError> {
@@ -114,7 +121,12 @@ pub(crate) fn failures(a: &Aligned, opts: &EvalOptions) -> Result<Failures, Eval
     let mut side_ni = [0usize; 2];
     let mut side_mi = [0usize; 2];
     for ((frame, t), p) in a.frames.iter().zip(&a.truth).zip(&a.pred) {
-        let expected = |cols: &Vec<usize>| cols.iter().copied().filter(|&k| t[k].is_found()).collect::<Vec<_>>();
+        let expected = |cols: &Vec<usize>| {
+            cols.iter()
+                .copied()
+                .filter(|&k| t[k].is_found())
+                .collect::<Vec<_>>()
+        };
         let per_side: Vec<Vec<usize>> = legs.iter().map(|(_, c)| expected(c)).collect();
         if per_side.iter().all(Vec::is_empty) {
             continue;
@@ -132,10 +144,19 @@ pub(crate) fn failures(a: &Aligned, opts: &EvalOptions) -> Result<Failures, Eval
             any += 1;
             continue;
         }
-        let both: Vec<&(usize, usize)> = pairs.iter().filter(|(kl, kr)| t[*kl].is_found() && t[*kr].is_found()).collect();
+        let both: Vec<&(usize, usize)> = pairs
+            .iter()
+            .filter(|(kl, kr)| t[*kl].is_found() && t[*kr].is_found())
+            .collect();
         if !both.is_empty() {
-            let same: f64 = both.iter().map(|&&(kl, kr)| distance(&p[kl], &t[kl]) + distance(&p[kr], &t[kr])).sum();
-            let cross: f64 = both.iter().map(|&&(kl, kr)| distance(&p[kl], &t[kr]) + distance(&p[kr], &t[kl])).sum();
+            let same: f64 = both
+                .iter()
+                .map(|&&(kl, kr)| distance(&p[kl], &t[kl]) + distance(&p[kr], &t[kr]))
+                .sum();
+            let cross: f64 = both
+                .iter()
+                .map(|&&(kl, kr)| distance(&p[kl], &t[kr]) + distance(&p[kr], &t[kl]))
+                .sum();
             if (same - cross) > margin * both.len() as f64 {
                 sw.push(*frame);
                 any += 1;

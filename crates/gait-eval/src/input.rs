@@ -10,7 +10,11 @@ use crate::{EvalError, openpose};
 /// multi-animal files `individual` picks one, the first by default) or from a
 /// folder of OpenPose per-frame JSON files. Neither layout stores the frame
 /// rate, so it is given as `fps`.
-pub fn read_poses(path: &Path, fps: f64, individual: Option<&str>) -> Result<PoseSequence, EvalError> {
+pub fn read_poses(
+    path: &Path,
+    fps: f64,
+    individual: Option<&str>,
+) -> Result<PoseSequence, EvalError> {
     if path.is_dir() {
         return openpose::read_dir(path, fps);
     }
@@ -21,8 +25,10 @@ pub fn read_poses(path: &Path, fps: f64, individual: Option<&str>) -> Result<Pos
         .unwrap_or_default();
     match ext.as_str() {
         "csv" => {
-            let file = std::fs::File::open(path).map_err(|e| EvalError::io(format!("opening {}", path.display()), e))?;
-            gait_core::dlc::read(std::io::BufReader::new(file), individual, fps).map_err(|e| EvalError::input(path, e))
+            let file = std::fs::File::open(path)
+                .map_err(|e| EvalError::io(format!("opening {}", path.display()), e))?;
+            gait_core::dlc::read(std::io::BufReader::new(file), individual, fps)
+                .map_err(|e| EvalError::input(path, e))
         }
         "h5" | "hdf5" => Err(EvalError::input(
             path,
@@ -47,11 +53,25 @@ mod tests {
     fn picks_the_reader_by_path() {
         let dir = tempfile::tempdir().unwrap();
         let csv = dir.path().join("t.csv");
-        std::fs::write(&csv, "scorer,s,s\nbodyparts,RKnee,RKnee\ncoords,x,y\n0,1,2\n").unwrap();
+        std::fs::write(
+            &csv,
+            "scorer,s,s\nbodyparts,RKnee,RKnee\ncoords,x,y\n0,1,2\n",
+        )
+        .unwrap();
         let s = read_poses(&csv, 30.0, None).unwrap();
         assert_eq!(s.names, vec!["RKnee"]);
         let h5 = dir.path().join("t.h5");
-        assert!(read_poses(&h5, 30.0, None).unwrap_err().to_string().contains("CSV"));
-        assert!(read_poses(dir.path(), 30.0, None).unwrap_err().to_string().contains("OpenPose"));
+        assert!(
+            read_poses(&h5, 30.0, None)
+                .unwrap_err()
+                .to_string()
+                .contains("CSV")
+        );
+        assert!(
+            read_poses(dir.path(), 30.0, None)
+                .unwrap_err()
+                .to_string()
+                .contains("OpenPose")
+        );
     }
 }

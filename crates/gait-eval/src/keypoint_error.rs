@@ -45,7 +45,10 @@ fn errors_of(a: &Aligned, k: usize, min_likelihood: f64) -> Vec<f64> {
         .collect()
 }
 
-pub(crate) fn keypoint_errors(a: &Aligned, opts: &EvalOptions) -> (Vec<KeypointError>, Vec<LegError>) {
+pub(crate) fn keypoint_errors(
+    a: &Aligned,
+    opts: &EvalOptions,
+) -> (Vec<KeypointError>, Vec<LegError>) {
     let per_kp: Vec<KeypointError> = a
         .names
         .iter()
@@ -69,7 +72,11 @@ pub(crate) fn keypoint_errors(a: &Aligned, opts: &EvalOptions) -> (Vec<KeypointE
                     pooled.extend(errors_of(a, k, opts.min_likelihood));
                 }
             }
-            LegError { side, role: opts.role(side), stat: Stat::of(&pooled) }
+            LegError {
+                side,
+                role: opts.role(side),
+                stat: Stat::of(&pooled),
+            }
         })
         .collect();
     (per_kp, legs)

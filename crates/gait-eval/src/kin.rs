@@ -36,7 +36,16 @@ pub fn angle_table(r: &KinResult) -> AngleTable {
     AngleTable {
         frames: (0..r.n_frames).map(|i| r.first_frame + i).collect(),
         values: (0..r.n_frames)
-            .map(|i| [at(&l.hip, i), at(&rt.hip, i), at(&l.knee, i), at(&rt.knee, i), at(&l.ankle, i), at(&rt.ankle, i)])
+            .map(|i| {
+                [
+                    at(&l.hip, i),
+                    at(&rt.hip, i),
+                    at(&l.knee, i),
+                    at(&rt.knee, i),
+                    at(&l.ankle, i),
+                    at(&rt.ankle, i),
+                ]
+            })
             .collect(),
     }
 }
@@ -48,7 +57,9 @@ pub fn cycle_curves(r: &KinResult) -> Vec<CycleCurve> {
         .map(|c| CycleCurve {
             side: c.side.into(),
             joint: c.joint.to_string(),
-            percent: (0..c.mean.len()).map(|i| 100.0 * i as f64 / (c.mean.len().max(2) - 1) as f64).collect(),
+            percent: (0..c.mean.len())
+                .map(|i| 100.0 * i as f64 / (c.mean.len().max(2) - 1) as f64)
+                .collect(),
             mean: c.mean.clone(),
             sd: c.sd.clone(),
             n_cycles: c.n_cycles,
@@ -57,7 +68,11 @@ pub fn cycle_curves(r: &KinResult) -> Vec<CycleCurve> {
 }
 
 /// Runs gait-kin on `seq` (post-processing, angles, events, cycles).
-pub fn analyse(seq: &PoseSequence, post: &PostprocessConfig, kin: &KinematicsConfig) -> Result<KinResult, EvalError> {
+pub fn analyse(
+    seq: &PoseSequence,
+    post: &PostprocessConfig,
+    kin: &KinematicsConfig,
+) -> Result<KinResult, EvalError> {
     gait_kin::analyse(seq, post, kin).map_err(|e| EvalError::Kinematics(e.to_string()))
 }
 
@@ -75,7 +90,15 @@ pub fn evaluate(
     let p = analyse(&canonicalize(pred, &opts.name_map)?, post, kin)?;
     let (ta, pa) = (angle_table(&t), angle_table(&p));
     let mut e = evaluate_with_angles(truth, pred, Some((&ta, &pa)), opts)?;
-    e.warnings.extend(t.warnings.iter().map(|w| format!("ground-truth kinematics: {w}")));
-    e.warnings.extend(p.warnings.iter().map(|w| format!("predicted kinematics: {w}")));
+    e.warnings.extend(
+        t.warnings
+            .iter()
+            .map(|w| format!("ground-truth kinematics: {w}")),
+    );
+    e.warnings.extend(
+        p.warnings
+            .iter()
+            .map(|w| format!("predicted kinematics: {w}")),
+    );
     Ok(e)
 }

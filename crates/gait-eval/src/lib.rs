@@ -11,12 +11,12 @@ pub mod failure;
 mod fsutil;
 mod html;
 mod input;
-pub mod kin;
 pub mod keypoint_error;
+pub mod kin;
 pub mod names;
 pub mod openpose;
-pub mod plot;
 mod options;
+pub mod plot;
 pub mod report;
 mod stats;
 mod table;
@@ -29,8 +29,11 @@ pub use export::{TrcOptions, write_mot, write_trc};
 pub use input::read_poses;
 pub use kin::evaluate;
 pub use names::Side;
-pub use plot::{CycleCurve, Figure, FailureEntry, StripOptions, comparison_plot, failure_bars, kinematics_plot, read_cycles_csv, skeleton_strip};
-pub use report::{Report, Table};
 pub use options::{EvalOptions, Role};
+pub use plot::{
+    CycleCurve, FailureEntry, Figure, StripOptions, comparison_plot, failure_bars, kinematics_plot,
+    read_cycles_csv, skeleton_strip,
+};
+pub use report::{Report, Table};
 pub use stats::Stat;
 pub use table::{metrics_csv, table_markdown, write_eval};

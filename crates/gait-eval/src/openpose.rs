@@ -87,8 +87,11 @@ fn frame_number(file_name: &str) -> Option<usize> {
     digits.parse().ok()
 }
 
+/// One of the keypoint orders, [`BODY_25`] or [`COCO_18`].
+type Layout = &'static [&'static str];
+
 /// Keypoints of the first person in one OpenPose JSON document, with the layout found.
-fn parse_frame(path: &Path, text: &str) -> Result<Option<(Vec<Keypoint>, &'static [&'static str])>, EvalError> {
+fn parse_frame(path: &Path, text: &str) -> Result<Option<(Vec<Keypoint>, Layout)>, EvalError> {
     let doc: Value = serde_json::from_str(text).map_err(|e| EvalError::input(path, e))?;
     let people = doc
         .get("people")
@@ -101,7 +104,7 @@ fn parse_frame(path: &Path, text: &str) -> Result<Option<(Vec<Keypoint>, &'stati
         .get("pose_keypoints_2d")
         .and_then(Value::as_array)
         .ok_or_else(|| EvalError::input(path, "people[0] has no `pose_keypoints_2d` array"))?;
-    let layout: &'static [&'static str] = match values.len() {
+    let layout: Layout = match values.len() {
         75 => &BODY_25,
         54 => &COCO_18,
         n => {
@@ -114,8 +117,9 @@ fn parse_frame(path: &Path, text: &str) -> Result<Option<(Vec<Keypoint>, &'stati
     let mut kps = Vec::with_capacity(layout.len());
     for t in values.chunks(3) {
         let num = |v: &Value| {
-            v.as_f64()
-                .ok_or_else(|| EvalError::input(path, format!("`{v}` in pose_keypoints_2d is not a number")))
+            v.as_f64().ok_or_else(|| {
+                EvalError::input(path, format!("`{v}` in pose_keypoints_2d is not a number"))
+            })
         };
         let (x, y, c) = (num(&t[0])?, num(&t[1])?, num(&t[2])?);
         // OpenPose writes 0, 0, 0 for a part it did not find.
@@ -132,34 +136,49 @@ fn parse_frame(path: &Path, text: &str) -> Result<Option<(Vec<Keypoint>, &'stati
 /// number in their names. COCO-18 has no mid-hip: it is the midpoint of the
 /// hips when both were found. Frames without a person are all missing.
 pub fn read_dir(dir: &Path, fps: f64) -> Result<PoseSequence, EvalError> {
-    let entries = std::fs::read_dir(dir).map_err(|e| EvalError::io(format!("reading {}", dir.display()), e))?;
+    let entries = std::fs::read_dir(dir)
+        .map_err(|e| EvalError::io(format!("reading {}", dir.display()), e))?;
     let mut files: Vec<(usize, PathBuf)> = Vec::new();
     for entry in entries {
-        let path = entry.map_err(|e| EvalError::io(format!("reading {}", dir.display()), e))?.path();
+        let path = entry
+            .map_err(|e| EvalError::io(format!("reading {}", dir.display()), e))?
+            .path();
         let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
         if let Some(frame) = frame_number(name) {
             files.push((frame, path));
         }
     }
     if files.is_empty() {
-        return Err(EvalError::input(dir, "no OpenPose `*_<frame>_keypoints.json` files in the folder"));
+        return Err(EvalError::input(
+            dir,
+            "no OpenPose `*_<frame>_keypoints.json` files in the folder",
+        ));
     }
     files.sort();
     if let Some(w) = files.windows(2).find(|w| w[0].0 == w[1].0) {
         return Err(EvalError::input(
             dir,
-            format!("two files for frame {}: {} and {}", w[0].0, w[0].1.display(), w[1].1.display()),
+            format!(
+                "two files for frame {}: {} and {}",
+                w[0].0,
+                w[0].1.display(),
+                w[1].1.display()
+            ),
         ));
     }
-    let mut layout: Option<&'static [&'static str]> = None;
+    let mut layout: Option<Layout> = None;
     let mut raw = Vec::with_capacity(files.len());
     for (frame, path) in &files {
-        let text = std::fs::read_to_string(path).map_err(|e| EvalError::io(format!("reading {}", path.display()), e))?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| EvalError::io(format!("reading {}", path.display()), e))?;
         let parsed = parse_frame(path, &text)?;
         if let Some((_, l)) = &parsed {
             match layout {
                 Some(prev) if prev.len() != l.len() => {
-                    return Err(EvalError::input(path, "mixes BODY_25 and COCO-18 keypoints with other files"));
+                    return Err(EvalError::input(
+                        path,
+                        "mixes BODY_25 and COCO-18 keypoints with other files",
+                    ));
                 }
                 _ => layout = Some(l),
             }
@@ -181,14 +200,23 @@ pub fn read_dir(dir: &Path, fps: f64) -> Result<PoseSequence, EvalError> {
             if layout.len() == COCO_18.len() {
                 let (l, r) = (pose.keypoints[5], pose.keypoints[6]);
                 if l.is_found() && r.is_found() {
-                    pose.keypoints[4] = Keypoint::new((l.x + r.x) / 2.0, (l.y + r.y) / 2.0, l.likelihood.min(r.likelihood));
+                    pose.keypoints[4] = Keypoint::new(
+                        (l.x + r.x) / 2.0,
+                        (l.y + r.y) / 2.0,
+                        l.likelihood.min(r.likelihood),
+                    );
                 }
             }
         }
         frames.push(frame);
         poses.push(pose);
     }
-    Ok(PoseSequence { fps, names, frames, poses })
+    Ok(PoseSequence {
+        fps,
+        names,
+        frames,
+        poses,
+    })
 }
 
 /// Writes one BODY_25 `<stem>_<frame:012>_keypoints.json` per frame into `dir`
@@ -196,14 +224,18 @@ pub fn read_dir(dir: &Path, fps: f64) -> Result<PoseSequence, EvalError> {
 /// missing ones are written as 0, 0, 0 and a frame with no keypoint found has
 /// no person, as OpenPose does.
 pub fn write_dir(seq: &PoseSequence, dir: &Path, stem: &str) -> Result<Vec<PathBuf>, EvalError> {
-    std::fs::create_dir_all(dir).map_err(|e| EvalError::io(format!("creating {}", dir.display()), e))?;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| EvalError::io(format!("creating {}", dir.display()), e))?;
     let columns: Vec<Option<usize>> = BODY_25.iter().map(|n| seq.index_of(n)).collect();
     let mut written = Vec::with_capacity(seq.len());
     for (frame, pose) in seq.frames.iter().zip(&seq.poses) {
         let mut values = Vec::with_capacity(75);
         let mut any = false;
         for col in &columns {
-            match col.and_then(|i| pose.keypoints.get(i)).filter(|k| k.is_found()) {
+            match col
+                .and_then(|i| pose.keypoints.get(i))
+                .filter(|k| k.is_found())
+            {
                 Some(k) => {
                     any = true;
                     values.extend([json!(k.x), json!(k.y), json!(k.likelihood)]);
@@ -256,16 +288,29 @@ mod tests {
         pose.keypoints[knee] = Keypoint::new(10.5, 20.25, 0.8);
         pose.keypoints[small] = Keypoint::new(1.0, 2.0, 0.5);
         let n = names.len();
-        let seq = PoseSequence { fps: 30.0, names, frames: vec![7, 8], poses: vec![pose, Pose::empty(n)] };
+        let seq = PoseSequence {
+            fps: 30.0,
+            names,
+            frames: vec![7, 8],
+            poses: vec![pose, Pose::empty(n)],
+        };
         write_dir(&seq, dir.path(), "walk").unwrap();
         let back = read_dir(dir.path(), 30.0).unwrap();
         assert_eq!(back.frames, vec![7, 8]);
         // NaN != NaN, so compare what was found.
-        let found = |p: &Pose| -> Vec<(usize, Keypoint)> { p.keypoints.iter().copied().enumerate().filter(|(_, k)| k.is_found()).collect() };
+        let found = |p: &Pose| -> Vec<(usize, Keypoint)> {
+            p.keypoints
+                .iter()
+                .copied()
+                .enumerate()
+                .filter(|(_, k)| k.is_found())
+                .collect()
+        };
         assert_eq!(found(&back.poses[0]), found(&seq.poses[0]));
         assert_eq!(found(&back.poses[0]).len(), 2);
         assert!(back.poses[1].keypoints.iter().all(|k| !k.is_found()));
-        let text = std::fs::read_to_string(dir.path().join("walk_000000000008_keypoints.json")).unwrap();
+        let text =
+            std::fs::read_to_string(dir.path().join("walk_000000000008_keypoints.json")).unwrap();
         assert!(text.contains("\"people\":[]"), "{text}");
     }
 
@@ -286,8 +331,17 @@ mod tests {
     #[test]
     fn bad_files_name_the_problem() {
         let dir = tempfile::tempdir().unwrap();
-        assert!(read_dir(dir.path(), 30.0).unwrap_err().to_string().contains("no OpenPose"));
-        std::fs::write(dir.path().join("a_0_keypoints.json"), r#"{"people":[{"pose_keypoints_2d":[1,2,3]}]}"#).unwrap();
+        assert!(
+            read_dir(dir.path(), 30.0)
+                .unwrap_err()
+                .to_string()
+                .contains("no OpenPose")
+        );
+        std::fs::write(
+            dir.path().join("a_0_keypoints.json"),
+            r#"{"people":[{"pose_keypoints_2d":[1,2,3]}]}"#,
+        )
+        .unwrap();
         let e = read_dir(dir.path(), 30.0).unwrap_err().to_string();
         assert!(e.contains("3 values") && e.contains("BODY_25"), "{e}");
     }

@@ -54,7 +54,12 @@ impl Default for EvalOptions {
 impl EvalOptions {
     /// Rejects values that make no sense, naming the key.
     pub fn validate(&self) -> Result<(), EvalError> {
-        let bad = |key, reason: &str| Err(EvalError::Option { key, reason: reason.to_string() });
+        let bad = |key, reason: &str| {
+            Err(EvalError::Option {
+                key,
+                reason: reason.to_string(),
+            })
+        };
         if !(0.0..=1.0).contains(&self.min_likelihood) {
             return bad("min_likelihood", "must be in [0, 1]");
         }
@@ -74,7 +79,11 @@ impl EvalOptions {
 
     /// "prosthetic" or "intact" for a side.
     pub fn role(&self, side: Side) -> Role {
-        if side == self.prosthetic_side { Role::Prosthetic } else { Role::Intact }
+        if side == self.prosthetic_side {
+            Role::Prosthetic
+        } else {
+            Role::Intact
+        }
     }
 }
 
@@ -101,12 +110,23 @@ mod tests {
 
     #[test]
     fn toml_defaults_and_unknown_keys() {
-        let o: EvalOptions = toml::from_str("prosthetic_side = \"left\"\nmethod = \"Zero-shot\"").unwrap();
+        let o: EvalOptions =
+            toml::from_str("prosthetic_side = \"left\"\nmethod = \"Zero-shot\"").unwrap();
         assert_eq!(o.prosthetic_side, Side::Left);
         assert_eq!(o.misid_fraction, 0.5);
-        let e = toml::from_str::<EvalOptions>("misid = 3").unwrap_err().to_string();
+        let e = toml::from_str::<EvalOptions>("misid = 3")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("misid") && e.contains("misid_fraction"), "{e}");
-        let o = EvalOptions { swap_fraction: -1.0, ..Default::default() };
-        assert!(o.validate().unwrap_err().to_string().contains("swap_fraction"));
+        let o = EvalOptions {
+            swap_fraction: -1.0,
+            ..Default::default()
+        };
+        assert!(
+            o.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("swap_fraction")
+        );
     }
 }

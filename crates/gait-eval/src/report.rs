@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::html::{base64, escape, table};
-use crate::plot::{CycleCurve, FailureEntry, Figure, comparison_plot, failure_bars, kinematics_plot};
+use crate::plot::{
+    CycleCurve, FailureEntry, Figure, comparison_plot, failure_bars, kinematics_plot,
+};
 use crate::table::table_markdown;
 use crate::{EvalError, Evaluation, Side};
 
@@ -68,16 +70,33 @@ th{background:#f0f0f0}.warnings li{color:#8a4b00}pre{background:#f6f6f6;padding:
 
 fn figure(fig: &Figure, caption: &str) -> String {
     // plotters' SVG is self-contained markup; drop any XML prolog before inlining.
-    let svg = fig.svg.find("<svg").map(|i| &fig.svg[i..]).unwrap_or(&fig.svg);
-    format!("<figure id=\"fig-{}\" class=\"plot\">{svg}<figcaption>{}</figcaption></figure>", escape(&fig.name), escape(caption))
+    let svg = fig
+        .svg
+        .find("<svg")
+        .map(|i| &fig.svg[i..])
+        .unwrap_or(&fig.svg);
+    format!(
+        "<figure id=\"fig-{}\" class=\"plot\">{svg}<figcaption>{}</figcaption></figure>",
+        escape(&fig.name),
+        escape(caption)
+    )
 }
 
 /// Markdown table (as written by [`table_markdown`]) to header and rows.
 fn parse_markdown(md: &str) -> (Vec<String>, Vec<Vec<String>>) {
-    let split = |l: &str| l.trim().trim_matches('|').split('|').map(|c| c.trim().to_string()).collect::<Vec<_>>();
+    let split = |l: &str| {
+        l.trim()
+            .trim_matches('|')
+            .split('|')
+            .map(|c| c.trim().to_string())
+            .collect::<Vec<_>>()
+    };
     let mut lines = md.lines().filter(|l| l.starts_with('|'));
     let header = lines.next().map(split).unwrap_or_default();
-    let rows = lines.filter(|l| !l.starts_with("|---")).map(split).collect();
+    let rows = lines
+        .filter(|l| !l.starts_with("|---"))
+        .map(split)
+        .collect();
     (header, rows)
 }
 
@@ -102,12 +121,22 @@ impl Report {
         if !self.cycles.is_empty() {
             body.push_str("<h2>Kinematics over the gait cycle</h2>");
             let fig = kinematics_plot(&self.cycles, self.prosthetic_side)?;
-            body.push_str(&figure(&fig, "Mean (line) and SD (band) over complete cycles; prosthetic red, intact blue."));
+            body.push_str(&figure(
+                &fig,
+                "Mean (line) and SD (band) over complete cycles; prosthetic red, intact blue.",
+            ));
         }
         if !self.truth_cycles.is_empty() && !self.method_cycles.is_empty() {
             body.push_str("<h2>Methods against ground truth</h2>");
-            let fig = comparison_plot(&self.truth_cycles, &self.method_cycles, self.prosthetic_side)?;
-            body.push_str(&figure(&fig, "Ground truth green with its SD band; one colour per method."));
+            let fig = comparison_plot(
+                &self.truth_cycles,
+                &self.method_cycles,
+                self.prosthetic_side,
+            )?;
+            body.push_str(&figure(
+                &fig,
+                "Ground truth green with its SD band; one colour per method.",
+            ));
         }
         if !self.evaluations.is_empty() {
             body.push_str("<h2>Errors against ground truth</h2>");
@@ -126,7 +155,15 @@ impl Report {
                     format!("{:.1} px", f.misid_threshold_px),
                 ]);
             }
-            let header = ["Method", "View", "Frames", "Not identified %", "Misidentified %", "Swapped %", "Misidentified above"];
+            let header = [
+                "Method",
+                "View",
+                "Frames",
+                "Not identified %",
+                "Misidentified %",
+                "Swapped %",
+                "Misidentified above",
+            ];
             body.push_str(&table(&header.map(String::from), &rows));
             let entries: Vec<FailureEntry> = if self.failure_entries.is_empty() {
                 self.evaluations
@@ -141,7 +178,10 @@ impl Report {
                 self.failure_entries.clone()
             };
             let fig = failure_bars(&entries)?;
-            body.push_str(&figure(&fig, "Failure modes as percentages of frames, per camera view."));
+            body.push_str(&figure(
+                &fig,
+                "Failure modes as percentages of frames, per camera view.",
+            ));
         }
         if let Some(strip) = &self.strip {
             body.push_str("<h2>Skeleton overlay</h2>");
@@ -156,7 +196,8 @@ impl Report {
         }
         if let Some(m) = &self.manifest {
             body.push_str("<h2>Run manifest (run.json)</h2>");
-            let text = serde_json::to_string_pretty(m).map_err(|e| EvalError::io("formatting run.json", e.into()))?;
+            let text = serde_json::to_string_pretty(m)
+                .map_err(|e| EvalError::io("formatting run.json", e.into()))?;
             body.push_str(&format!("<pre>{}</pre>", escape(&text)));
         }
         Ok(format!(
@@ -178,10 +219,15 @@ impl Report {
     /// `spatiotemporal.csv` and `events.csv` when present, and a skeleton strip
     /// from `keypoints.csv`. Files that are absent are left out.
     pub fn from_run_dir(dir: &Path, prosthetic_side: Side) -> Result<Report, EvalError> {
-        let mut r = Report { prosthetic_side, title: format!("Gait analysis report: {}", dir.display()), ..Default::default() };
+        let mut r = Report {
+            prosthetic_side,
+            title: format!("Gait analysis report: {}", dir.display()),
+            ..Default::default()
+        };
         let run = dir.join("run.json");
         if run.exists() {
-            let text = std::fs::read_to_string(&run).map_err(|e| EvalError::io(format!("reading {}", run.display()), e))?;
+            let text = std::fs::read_to_string(&run)
+                .map_err(|e| EvalError::io(format!("reading {}", run.display()), e))?;
             let v: Value = serde_json::from_str(&text).map_err(|e| EvalError::input(&run, e))?;
             collect_warnings(&v, &mut r.warnings);
             r.manifest = Some(v);
@@ -190,7 +236,10 @@ impl Report {
         if cycles.exists() {
             r.cycles = crate::plot::read_cycles_csv(&cycles)?;
         }
-        for (file, title) in [("spatiotemporal.csv", "Spatiotemporal parameters"), ("events.csv", "Gait events")] {
+        for (file, title) in [
+            ("spatiotemporal.csv", "Spatiotemporal parameters"),
+            ("events.csv", "Gait events"),
+        ] {
             let p = dir.join(file);
             if p.exists() {
                 r.tables.push(read_table(&p, title)?);
@@ -198,10 +247,19 @@ impl Report {
         }
         let kp = dir.join("keypoints.csv");
         if kp.exists() {
-            let fps = r.manifest.as_ref().and_then(|m| m.get("fps")).and_then(Value::as_f64).unwrap_or(30.0);
+            let fps = r
+                .manifest
+                .as_ref()
+                .and_then(|m| m.get("fps"))
+                .and_then(Value::as_f64)
+                .unwrap_or(30.0);
             let seq = crate::read_poses(&kp, fps, None)?;
             if !seq.is_empty() {
-                r.strip = Some(crate::plot::skeleton_strip(&seq, &[], &crate::plot::StripOptions::default())?);
+                r.strip = Some(crate::plot::skeleton_strip(
+                    &seq,
+                    &[],
+                    &crate::plot::StripOptions::default(),
+                )?);
             }
         }
         Ok(r)
@@ -229,12 +287,26 @@ fn collect_warnings(v: &Value, out: &mut Vec<String>) {
 
 fn read_table(path: &Path, title: &str) -> Result<Table, EvalError> {
     let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
-    let header = r.headers().map_err(|e| EvalError::input(path, e))?.iter().map(str::to_string).collect();
+    let header = r
+        .headers()
+        .map_err(|e| EvalError::input(path, e))?
+        .iter()
+        .map(str::to_string)
+        .collect();
     let mut rows = Vec::new();
     for rec in r.records() {
-        rows.push(rec.map_err(|e| EvalError::input(path, e))?.iter().map(str::to_string).collect());
+        rows.push(
+            rec.map_err(|e| EvalError::input(path, e))?
+                .iter()
+                .map(str::to_string)
+                .collect(),
+        );
     }
-    Ok(Table { title: title.into(), header, rows })
+    Ok(Table {
+        title: title.into(),
+        header,
+        rows,
+    })
 }
 
 #[cfg(test)]
@@ -249,13 +321,32 @@ mod tests {
             r#"{"tool":"gait 0.1.0","kinematics":{"warnings":["left/right leg labels corrected in 3 frames","<cycle 2 rejected>"]}}"#,
         )
         .unwrap();
-        std::fs::write(dir.path().join("spatiotemporal.csv"), "parameter,side,value,unit\ncadence,,104.2,steps/min\n").unwrap();
-        let html = Report::from_run_dir(dir.path(), Side::Left).unwrap().html().unwrap();
+        std::fs::write(
+            dir.path().join("spatiotemporal.csv"),
+            "parameter,side,value,unit\ncadence,,104.2,steps/min\n",
+        )
+        .unwrap();
+        let html = Report::from_run_dir(dir.path(), Side::Left)
+            .unwrap()
+            .html()
+            .unwrap();
         assert!(html.contains("<li>left/right leg labels corrected in 3 frames</li>"));
-        assert!(html.contains("&lt;cycle 2 rejected&gt;"), "warnings are escaped");
-        assert!(html.contains("<td>cadence</td>") && html.contains("&quot;tool&quot;: &quot;gait 0.1.0&quot;"));
+        assert!(
+            html.contains("&lt;cycle 2 rejected&gt;"),
+            "warnings are escaped"
+        );
+        assert!(
+            html.contains("<td>cadence</td>")
+                && html.contains("&quot;tool&quot;: &quot;gait 0.1.0&quot;")
+        );
         assert!(!html.contains("<script"), "no script in the report");
         let empty = tempfile::tempdir().unwrap();
-        assert!(Report::from_run_dir(empty.path(), Side::Right).unwrap().html().unwrap().contains("<p>None.</p>"));
+        assert!(
+            Report::from_run_dir(empty.path(), Side::Right)
+                .unwrap()
+                .html()
+                .unwrap()
+                .contains("<p>None.</p>")
+        );
     }
 }

@@ -15,11 +15,21 @@ impl Stat {
     pub fn of(values: &[f64]) -> Stat {
         let n = values.len();
         if n == 0 {
-            return Stat { n, mean: None, sd: None };
+            return Stat {
+                n,
+                mean: None,
+                sd: None,
+            };
         }
         let mean = values.iter().sum::<f64>() / n as f64;
-        let sd = (n > 1).then(|| (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt());
-        Stat { n, mean: Some(mean), sd }
+        let sd = (n > 1).then(|| {
+            (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
+        });
+        Stat {
+            n,
+            mean: Some(mean),
+            sd,
+        }
     }
 
     /// Statistics of the union of the samples behind `parts` (exact pooling of
@@ -32,11 +42,22 @@ impl Stat {
             .collect();
         let n: usize = parts.iter().map(|p| p.0).sum();
         if n == 0 {
-            return Stat { n: 0, mean: None, sd: None };
+            return Stat {
+                n: 0,
+                mean: None,
+                sd: None,
+            };
         }
         let mean = parts.iter().map(|p| p.0 as f64 * p.1).sum::<f64>() / n as f64;
-        let ss: f64 = parts.iter().map(|&(k, m, s)| (k as f64 - 1.0) * s * s + k as f64 * (m - mean).powi(2)).sum();
-        Stat { n, mean: Some(mean), sd: (n > 1).then(|| (ss / (n - 1) as f64).sqrt()) }
+        let ss: f64 = parts
+            .iter()
+            .map(|&(k, m, s)| (k as f64 - 1.0) * s * s + k as f64 * (m - mean).powi(2))
+            .sum();
+        Stat {
+            n,
+            mean: Some(mean),
+            sd: (n > 1).then(|| (ss / (n - 1) as f64).sqrt()),
+        }
     }
 
     /// "12.01 (3.54)" as in the paper's table; "–" without samples.
@@ -56,7 +77,11 @@ pub(crate) fn median(values: &mut [f64]) -> Option<f64> {
     }
     values.sort_by(f64::total_cmp);
     let n = values.len();
-    Some(if n % 2 == 1 { values[n / 2] } else { (values[n / 2 - 1] + values[n / 2]) / 2.0 })
+    Some(if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        (values[n / 2 - 1] + values[n / 2]) / 2.0
+    })
 }
 
 #[cfg(test)]

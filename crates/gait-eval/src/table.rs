@@ -37,8 +37,18 @@ pub fn table_markdown(evals: &[Evaluation]) -> String {
     out.push('\n');
     type Pick = fn(&Evaluation, Role) -> Option<Stat>;
     let coords: Pick = |e, r| e.legs.iter().find(|l| l.role == r).map(|l| l.stat);
-    let kin: Pick = |e, r| e.kinematics.as_ref()?.legs.iter().find(|l| l.role == r).map(|l| l.stat);
-    for (metric, pick) in [("Joint Coordinates (pixels)", coords), ("Joint Kinematics (°)", kin)] {
+    let kin: Pick = |e, r| {
+        e.kinematics
+            .as_ref()?
+            .legs
+            .iter()
+            .find(|l| l.role == r)
+            .map(|l| l.stat)
+    };
+    for (metric, pick) in [
+        ("Joint Coordinates (pixels)", coords),
+        ("Joint Kinematics (°)", kin),
+    ] {
         for g in &groups {
             for role in [Role::Prosthetic, Role::Intact] {
                 let cells: Vec<Stat> = methods
@@ -52,8 +62,15 @@ pub fn table_markdown(evals: &[Evaluation]) -> String {
                         Stat::pool(&parts)
                     })
                     .collect();
-                let best = cells.iter().filter_map(|s| s.mean).fold(f64::INFINITY, f64::min);
-                let role_name = if role == Role::Prosthetic { "Prosthetic" } else { "Intact" };
+                let best = cells
+                    .iter()
+                    .filter_map(|s| s.mean)
+                    .fold(f64::INFINITY, f64::min);
+                let role_name = if role == Role::Prosthetic {
+                    "Prosthetic"
+                } else {
+                    "Intact"
+                };
                 out.push_str(&format!("| {metric} | {g} | {role_name} |"));
                 for c in &cells {
                     let text = c.cell();
@@ -78,10 +95,20 @@ fn num(v: Option<f64>) -> String {
 pub fn metrics_csv(evals: &[Evaluation]) -> Result<String, EvalError> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let wrap = |e: csv::Error| EvalError::io("formatting metrics.csv", e.into());
-    w.write_record(["method", "group", "view", "metric", "name", "side", "role", "unit", "n", "mean", "sd"]).map_err(wrap)?;
+    w.write_record([
+        "method", "group", "view", "metric", "name", "side", "role", "unit", "n", "mean", "sd",
+    ])
+    .map_err(wrap)?;
     for e in evals {
         let o = &e.options;
-        let mut row = |metric: &str, name: &str, side: &str, role: &str, unit: &str, n: usize, mean: Option<f64>, sd: Option<f64>| {
+        let mut row = |metric: &str,
+                       name: &str,
+                       side: &str,
+                       role: &str,
+                       unit: &str,
+                       n: usize,
+                       mean: Option<f64>,
+                       sd: Option<f64>| {
             w.write_record([
                 o.method.as_str(),
                 o.group.as_deref().unwrap_or(""),
@@ -97,32 +124,102 @@ pub fn metrics_csv(evals: &[Evaluation]) -> Result<String, EvalError> {
             ])
         };
         for k in &e.keypoints {
-            let (side, role) = (k.side.map(|s| s.as_str()).unwrap_or(""), k.role.map(Role::as_str).unwrap_or(""));
-            row("keypoint", &k.name, side, role, "px", k.px.n, k.px.mean, k.px.sd).map_err(wrap)?;
+            let (side, role) = (
+                k.side.map(|s| s.as_str()).unwrap_or(""),
+                k.role.map(Role::as_str).unwrap_or(""),
+            );
+            row(
+                "keypoint", &k.name, side, role, "px", k.px.n, k.px.mean, k.px.sd,
+            )
+            .map_err(wrap)?;
         }
         for l in &e.legs {
-            row("leg_keypoints", "leg", l.side.as_str(), l.role.as_str(), "px", l.stat.n, l.stat.mean, l.stat.sd).map_err(wrap)?;
+            row(
+                "leg_keypoints",
+                "leg",
+                l.side.as_str(),
+                l.role.as_str(),
+                "px",
+                l.stat.n,
+                l.stat.mean,
+                l.stat.sd,
+            )
+            .map_err(wrap)?;
         }
         if let Some(k) = &e.kinematics {
             for j in &k.joints {
-                row("joint_angle", &j.joint, j.side.as_str(), j.role.as_str(), "deg", j.deg.n, j.deg.mean, j.deg.sd).map_err(wrap)?;
+                row(
+                    "joint_angle",
+                    &j.joint,
+                    j.side.as_str(),
+                    j.role.as_str(),
+                    "deg",
+                    j.deg.n,
+                    j.deg.mean,
+                    j.deg.sd,
+                )
+                .map_err(wrap)?;
             }
             for l in &k.legs {
-                row("leg_kinematics", "leg", l.side.as_str(), l.role.as_str(), "deg", l.stat.n, l.stat.mean, l.stat.sd).map_err(wrap)?;
+                row(
+                    "leg_kinematics",
+                    "leg",
+                    l.side.as_str(),
+                    l.role.as_str(),
+                    "deg",
+                    l.stat.n,
+                    l.stat.mean,
+                    l.stat.sd,
+                )
+                .map_err(wrap)?;
             }
         }
         let f = &e.failures;
-        for (name, c) in [("not_identified", &f.not_identified), ("swapped", &f.swapped), ("misidentified", &f.misidentified), ("any", &f.any)] {
-            row("failure", name, "", "", "percent_of_frames", c.frames, Some(c.percent), None).map_err(wrap)?;
+        for (name, c) in [
+            ("not_identified", &f.not_identified),
+            ("swapped", &f.swapped),
+            ("misidentified", &f.misidentified),
+            ("any", &f.any),
+        ] {
+            row(
+                "failure",
+                name,
+                "",
+                "",
+                "percent_of_frames",
+                c.frames,
+                Some(c.percent),
+                None,
+            )
+            .map_err(wrap)?;
         }
         for s in &f.by_side {
-            for (name, c) in [("not_identified", &s.not_identified), ("misidentified", &s.misidentified)] {
-                row("failure", name, s.side.as_str(), s.role.as_str(), "percent_of_frames", c.frames, Some(c.percent), None).map_err(wrap)?;
+            for (name, c) in [
+                ("not_identified", &s.not_identified),
+                ("misidentified", &s.misidentified),
+            ] {
+                row(
+                    "failure",
+                    name,
+                    s.side.as_str(),
+                    s.role.as_str(),
+                    "percent_of_frames",
+                    c.frames,
+                    Some(c.percent),
+                    None,
+                )
+                .map_err(wrap)?;
             }
         }
     }
-    let bytes = w.into_inner().map_err(|e| EvalError::io("formatting metrics.csv", std::io::Error::other(e.to_string())))?;
-    String::from_utf8(bytes).map_err(|e| EvalError::io("formatting metrics.csv", std::io::Error::other(e)))
+    let bytes = w.into_inner().map_err(|e| {
+        EvalError::io(
+            "formatting metrics.csv",
+            std::io::Error::other(e.to_string()),
+        )
+    })?;
+    String::from_utf8(bytes)
+        .map_err(|e| EvalError::io("formatting metrics.csv", std::io::Error::other(e)))
 }
 
 /// Writes `metrics.csv`, `metrics.json` (the evaluation, or an array of them

@@ -2,7 +2,10 @@
 
 use gait_core::{Frame, Keypoint, Pose, PoseSequence};
 use gait_eval::failure::{Count, Failures};
-use gait_eval::{CycleCurve, FailureEntry, Figure, Side, StripOptions, comparison_plot, failure_bars, kinematics_plot, skeleton_strip};
+use gait_eval::{
+    CycleCurve, FailureEntry, Figure, Side, StripOptions, comparison_plot, failure_bars,
+    kinematics_plot, skeleton_strip,
+};
 
 pub fn curves(offset: f64) -> Vec<CycleCurve> {
     let mut out = Vec::new();
@@ -10,8 +13,20 @@ pub fn curves(offset: f64) -> Vec<CycleCurve> {
         for (j, joint) in ["hip", "knee", "ankle"].iter().enumerate() {
             let percent: Vec<f64> = (0..=100).map(f64::from).collect();
             let shift = if side == Side::Right { 25.0 } else { 0.0 };
-            let mean = percent.iter().map(|p| offset + shift + 20.0 * (p / 100.0 * std::f64::consts::TAU + j as f64).sin()).collect();
-            out.push(CycleCurve { side, joint: joint.to_string(), percent, mean, sd: vec![4.0; 101], n_cycles: 4 });
+            let mean = percent
+                .iter()
+                .map(|p| {
+                    offset + shift + 20.0 * (p / 100.0 * std::f64::consts::TAU + j as f64).sin()
+                })
+                .collect();
+            out.push(CycleCurve {
+                side,
+                joint: joint.to_string(),
+                percent,
+                mean,
+                sd: vec![4.0; 101],
+                n_cycles: 4,
+            });
         }
     }
     out
@@ -19,8 +34,12 @@ pub fn curves(offset: f64) -> Vec<CycleCurve> {
 
 /// Pixels close to `rgb` in the PNG.
 fn count_colour(fig: &Figure, rgb: [u8; 3]) -> usize {
-    let img = image::load_from_memory(&fig.png).expect("PNG decodes").to_rgb8();
-    img.pixels().filter(|p| p.0.iter().zip(rgb).all(|(a, b)| a.abs_diff(b) < 12)).count()
+    let img = image::load_from_memory(&fig.png)
+        .expect("PNG decodes")
+        .to_rgb8();
+    img.pixels()
+        .filter(|p| p.0.iter().zip(rgb).all(|(a, b)| a.abs_diff(b) < 12))
+        .count()
 }
 
 fn dark_pixels(fig: &Figure) -> usize {
@@ -31,12 +50,32 @@ fn dark_pixels(fig: &Figure) -> usize {
 #[test]
 fn kinematics_and_comparison_plots() {
     let k = kinematics_plot(&curves(0.0), Side::Right).unwrap();
-    assert!(count_colour(&k, [214, 39, 40]) > 500, "prosthetic line visible");
-    assert!(count_colour(&k, [31, 119, 180]) > 500, "intact line visible");
+    assert!(
+        count_colour(&k, [214, 39, 40]) > 500,
+        "prosthetic line visible"
+    );
+    assert!(
+        count_colour(&k, [31, 119, 180]) > 500,
+        "intact line visible"
+    );
     assert!(dark_pixels(&k) > 500, "axis text is rendered");
-    assert!(k.svg.contains("Knee angle") && k.svg.contains("<polyline"), "SVG has text and lines");
-    let c = comparison_plot(&curves(0.0), &[("OpenPose".into(), curves(5.0)), ("Zero-shot".into(), curves(2.0))], Side::Right).unwrap();
-    assert!(count_colour(&c, [44, 160, 44]) > 500, "ground truth visible");
+    assert!(
+        k.svg.contains("Knee angle") && k.svg.contains("<polyline"),
+        "SVG has text and lines"
+    );
+    let c = comparison_plot(
+        &curves(0.0),
+        &[
+            ("OpenPose".into(), curves(5.0)),
+            ("Zero-shot".into(), curves(2.0)),
+        ],
+        Side::Right,
+    )
+    .unwrap();
+    assert!(
+        count_colour(&c, [44, 160, 44]) > 500,
+        "ground truth visible"
+    );
     assert!(c.svg.contains("Zero-shot") && c.svg.contains("prosthetic (right)"));
     let dir = tempfile::tempdir().unwrap();
     let paths = c.write(dir.path()).unwrap();
@@ -44,7 +83,10 @@ fn kinematics_and_comparison_plots() {
 }
 
 fn failures(ni: f64, sw: f64) -> Failures {
-    let c = |p: f64| Count { frames: (p * 1.8) as usize, percent: p };
+    let c = |p: f64| Count {
+        frames: (p * 1.8) as usize,
+        percent: p,
+    };
     Failures {
         frames: 180,
         not_identified: c(ni),
@@ -66,8 +108,15 @@ fn failure_bars_per_view() {
     let entries: Vec<FailureEntry> = ["anterior", "posterior", "left", "right"]
         .iter()
         .flat_map(|v| {
-            [("OpenPose", failures(40.0, 2.0)), ("Zero-shot", failures(5.0, 8.0))]
-                .map(|(m, f)| FailureEntry { view: v.to_string(), method: m.into(), failures: f })
+            [
+                ("OpenPose", failures(40.0, 2.0)),
+                ("Zero-shot", failures(5.0, 8.0)),
+            ]
+            .map(|(m, f)| FailureEntry {
+                view: v.to_string(),
+                method: m.into(),
+                failures: f,
+            })
         })
         .collect();
     let f = failure_bars(&entries).unwrap();
@@ -89,14 +138,44 @@ fn skeleton_strip_over_frames() {
             })
             .collect(),
     };
-    let seq = PoseSequence { fps: 30.0, names: names.clone(), frames: (0..10).collect(), poses: (0..10).map(|i| pose(i as f64)).collect() };
+    let seq = PoseSequence {
+        fps: 30.0,
+        names: names.clone(),
+        frames: (0..10).collect(),
+        poses: (0..10).map(|i| pose(i as f64)).collect(),
+    };
     let gray = image::RgbImage::from_pixel(200, 260, image::Rgb([128, 128, 128]));
     let frames: Vec<Frame> = (0..5).map(|i| Frame::new(i, gray.clone())).collect();
-    let s = skeleton_strip(&seq, &frames, &StripOptions { max_frames: 4, height: 260 }).unwrap();
+    let s = skeleton_strip(
+        &seq,
+        &frames,
+        &StripOptions {
+            max_frames: 4,
+            height: 260,
+        },
+    )
+    .unwrap();
     let img = image::load_from_memory(&s.png).unwrap().to_rgb8();
     assert_eq!(img.height(), 260);
-    assert!(count_colour(&s, [128, 128, 128]) > 20_000, "frame pixels under the skeleton");
-    assert!(count_colour(&s, [214, 39, 40]) > 100 && count_colour(&s, [31, 119, 180]) > 100, "both legs drawn");
+    assert!(
+        count_colour(&s, [128, 128, 128]) > 20_000,
+        "frame pixels under the skeleton"
+    );
+    assert!(
+        count_colour(&s, [214, 39, 40]) > 100 && count_colour(&s, [31, 119, 180]) > 100,
+        "both legs drawn"
+    );
     assert!(s.svg.contains("frame 9"), "last frame is in the strip");
-    assert!(skeleton_strip(&PoseSequence { poses: vec![], frames: vec![], ..seq }, &[], &StripOptions::default()).is_err());
+    assert!(
+        skeleton_strip(
+            &PoseSequence {
+                poses: vec![],
+                frames: vec![],
+                ..seq
+            },
+            &[],
+            &StripOptions::default()
+        )
+        .is_err()
+    );
 }

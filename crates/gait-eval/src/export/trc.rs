@@ -23,18 +23,27 @@ pub struct TrcOptions {
 /// keypoints are blank cells.
 pub fn write_trc(seq: &PoseSequence, path: &Path, opts: &TrcOptions) -> Result<(), EvalError> {
     if !(seq.fps.is_finite() && seq.fps > 0.0) {
-        return Err(EvalError::Option { key: "fps", reason: format!("{} is not a positive frame rate", seq.fps) });
+        return Err(EvalError::Option {
+            key: "fps",
+            reason: format!("{} is not a positive frame rate", seq.fps),
+        });
     }
     if let Some(s) = opts.metres_per_pixel
         && !(s.is_finite() && s > 0.0)
     {
-        return Err(EvalError::Option { key: "metres_per_pixel", reason: format!("{s} is not a positive scale") });
+        return Err(EvalError::Option {
+            key: "metres_per_pixel",
+            reason: format!("{s} is not a positive scale"),
+        });
     }
     let (scale, units) = match opts.metres_per_pixel {
         Some(s) => (s, "m"),
         None => (1.0, "px"),
     };
-    let file_name = path.file_name().and_then(|n| n.to_str()).unwrap_or("markers.trc");
+    let file_name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or("markers.trc");
     let fps = seq.fps;
     let n = seq.len();
     let m = seq.names.len();
@@ -43,7 +52,10 @@ pub fn write_trc(seq: &PoseSequence, path: &Path, opts: &TrcOptions) -> Result<(
     // Writing into a String cannot fail.
     let _ = writeln!(out, "PathFileType\t4\t(X/Y/Z)\t{file_name}");
     out.push_str("DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n");
-    let _ = writeln!(out, "{fps:.2}\t{fps:.2}\t{n}\t{m}\t{units}\t{fps:.2}\t{first}\t{n}");
+    let _ = writeln!(
+        out,
+        "{fps:.2}\t{fps:.2}\t{n}\t{m}\t{units}\t{fps:.2}\t{first}\t{n}"
+    );
     out.push_str("Frame#\tTime");
     for name in &seq.names {
         let _ = write!(out, "\t{name}\t\t");
@@ -80,13 +92,27 @@ mod tests {
             names: vec!["left_knee".into(), "right_knee".into()],
             frames: vec![4, 5],
             poses: vec![
-                Pose { keypoints: vec![Keypoint::new(100.0, 200.0, 1.0), Keypoint::missing()] },
-                Pose { keypoints: vec![Keypoint::new(110.0, 210.0, 1.0), Keypoint::new(1.0, 2.0, 1.0)] },
+                Pose {
+                    keypoints: vec![Keypoint::new(100.0, 200.0, 1.0), Keypoint::missing()],
+                },
+                Pose {
+                    keypoints: vec![
+                        Keypoint::new(110.0, 210.0, 1.0),
+                        Keypoint::new(1.0, 2.0, 1.0),
+                    ],
+                },
             ],
         };
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("walk.trc");
-        write_trc(&seq, &p, &TrcOptions { metres_per_pixel: Some(0.003) }).unwrap();
+        write_trc(
+            &seq,
+            &p,
+            &TrcOptions {
+                metres_per_pixel: Some(0.003),
+            },
+        )
+        .unwrap();
         let text = std::fs::read_to_string(&p).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], "PathFileType\t4\t(X/Y/Z)\twalk.trc");
@@ -97,7 +123,23 @@ mod tests {
         assert_eq!(lines[6], "5\t0.133333\t0.300000\t-0.600000\t0.000000\t\t\t");
         assert_eq!(lines[7].split('\t').count(), 2 + 3 * 2);
         write_trc(&seq, &p, &TrcOptions::default()).unwrap();
-        assert!(std::fs::read_to_string(&p).unwrap().lines().nth(2).unwrap().contains("\tpx\t"));
-        assert!(write_trc(&seq, &p, &TrcOptions { metres_per_pixel: Some(-1.0) }).is_err());
+        assert!(
+            std::fs::read_to_string(&p)
+                .unwrap()
+                .lines()
+                .nth(2)
+                .unwrap()
+                .contains("\tpx\t")
+        );
+        assert!(
+            write_trc(
+                &seq,
+                &p,
+                &TrcOptions {
+                    metres_per_pixel: Some(-1.0)
+                }
+            )
+            .is_err()
+        );
     }
 }

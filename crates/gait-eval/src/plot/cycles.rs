@@ -26,11 +26,23 @@ pub struct CycleCurve {
 /// Reads a `cycles.csv` (`side,joint,percent,mean,sd,n_cycles`).
 pub fn read_cycles_csv(path: &Path) -> Result<Vec<CycleCurve>, EvalError> {
     let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
-    let header: Vec<String> = r.headers().map_err(|e| EvalError::input(path, e))?.iter().map(str::to_string).collect();
+    let header: Vec<String> = r
+        .headers()
+        .map_err(|e| EvalError::input(path, e))?
+        .iter()
+        .map(str::to_string)
+        .collect();
     let want = ["side", "joint", "percent", "mean", "sd", "n_cycles"];
     let cols: Vec<usize> = want
         .iter()
-        .map(|w| header.iter().position(|h| h == w).ok_or_else(|| EvalError::input(path, format!("no `{w}` column; expected {}", want.join(",")))))
+        .map(|w| {
+            header.iter().position(|h| h == w).ok_or_else(|| {
+                EvalError::input(
+                    path,
+                    format!("no `{w}` column; expected {}", want.join(",")),
+                )
+            })
+        })
         .collect::<Result<_, _>>()?;
     let mut curves: Vec<CycleCurve> = Vec::new();
     for (i, rec) in r.records().enumerate() {
@@ -42,16 +54,33 @@ pub fn read_cycles_csv(path: &Path) -> Result<Vec<CycleCurve>, EvalError> {
             if s.is_empty() {
                 return Ok(f64::NAN);
             }
-            s.parse().map_err(|_| EvalError::input(path, format!("line {line}: `{s}` is not a number")))
+            s.parse()
+                .map_err(|_| EvalError::input(path, format!("line {line}: `{s}` is not a number")))
         };
-        let side: Side = text(0).parse().map_err(|e| EvalError::input(path, format!("line {line}: {e}")))?;
+        let side: Side = text(0)
+            .parse()
+            .map_err(|e| EvalError::input(path, format!("line {line}: {e}")))?;
         let joint = text(1).to_string();
-        let n_cycles = text(5).parse().map_err(|_| EvalError::input(path, format!("line {line}: n_cycles is not a whole number")))?;
-        let curve = match curves.iter_mut().find(|c| c.side == side && c.joint == joint) {
+        let n_cycles = text(5).parse().map_err(|_| {
+            EvalError::input(path, format!("line {line}: n_cycles is not a whole number"))
+        })?;
+        let curve = match curves
+            .iter_mut()
+            .find(|c| c.side == side && c.joint == joint)
+        {
             Some(c) => c,
             None => {
-                curves.push(CycleCurve { side, joint, percent: vec![], mean: vec![], sd: vec![], n_cycles });
-                curves.last_mut().ok_or_else(|| EvalError::input(path, "internal"))?
+                curves.push(CycleCurve {
+                    side,
+                    joint,
+                    percent: vec![],
+                    mean: vec![],
+                    sd: vec![],
+                    n_cycles,
+                });
+                curves
+                    .last_mut()
+                    .ok_or_else(|| EvalError::input(path, "internal"))?
             }
         };
         curve.percent.push(num(2)?);
@@ -64,8 +93,15 @@ pub fn read_cycles_csv(path: &Path) -> Result<Vec<CycleCurve>, EvalError> {
 const JOINTS: [&str; 3] = ["hip", "knee", "ankle"];
 
 fn title(joint: &str) -> String {
-    let unit = if joint == "ankle" { "dorsiflexion +" } else { "flexion +" };
-    format!("{} angle (°, {unit})", joint[..1].to_uppercase() + &joint[1..])
+    let unit = if joint == "ankle" {
+        "dorsiflexion +"
+    } else {
+        "flexion +"
+    };
+    format!(
+        "{} angle (°, {unit})",
+        joint[..1].to_uppercase() + &joint[1..]
+    )
 }
 
 /// One series of a panel: curve, colour, label, whether to draw the SD band.
@@ -76,13 +112,21 @@ struct Series<'a> {
     band: bool,
 }
 
-fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, caption: &str, series: &[Series]) -> Result<(), String> {
+fn panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    caption: &str,
+    series: &[Series],
+) -> Result<(), String> {
     let (lo, hi) = padded_range(series.iter().flat_map(|s| {
         let band = if s.band { 1.0 } else { 0.0 };
-        s.curve.mean.iter().zip(&s.curve.sd).flat_map(move |(m, d)| {
-            let d = if d.is_finite() { d * band } else { 0.0 };
-            [m - d, m + d]
-        })
+        s.curve
+            .mean
+            .iter()
+            .zip(&s.curve.sd)
+            .flat_map(move |(m, d)| {
+                let d = if d.is_finite() { d * band } else { 0.0 };
+                [m - d, m + d]
+            })
     }));
     let mut chart = ChartBuilder::on(area)
         .caption(caption, (FONT, 16))
@@ -113,7 +157,12 @@ fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, caption: &str, serie
             let mut poly = pts(1.0);
             poly.extend(pts(-1.0).into_iter().rev());
             if poly.len() > 2 {
-                chart.draw_series(std::iter::once(Polygon::new(poly, s.color.mix(0.2).filled()))).map_err(err)?;
+                chart
+                    .draw_series(std::iter::once(Polygon::new(
+                        poly,
+                        s.color.mix(0.2).filled(),
+                    )))
+                    .map_err(err)?;
             }
         }
         let line: Vec<(f64, f64)> = s
@@ -129,7 +178,9 @@ fn panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, caption: &str, serie
             .draw_series(LineSeries::new(line, color.stroke_width(2)))
             .map_err(err)?
             .label(s.label.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
     }
     chart
         .configure_series_labels()
@@ -148,14 +199,30 @@ struct Kinematics<'a> {
 }
 
 impl Draw for Kinematics<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, _bitmap: bool) -> Result<(), String> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        _bitmap: bool,
+    ) -> Result<(), String> {
         for (area, joint) in root.split_evenly((1, 3)).iter().zip(JOINTS) {
             let series: Vec<Series> = [self.prosthetic.other(), self.prosthetic]
                 .iter()
                 .filter_map(|&side| {
-                    let c = self.curves.iter().find(|c| c.side == side && c.joint == joint)?;
-                    let (color, role) = if side == self.prosthetic { (PROSTHETIC, "prosthetic") } else { (INTACT, "intact") };
-                    Some(Series { curve: c, color, label: format!("{role} ({}, n={})", side.as_str(), c.n_cycles), band: true })
+                    let c = self
+                        .curves
+                        .iter()
+                        .find(|c| c.side == side && c.joint == joint)?;
+                    let (color, role) = if side == self.prosthetic {
+                        (PROSTHETIC, "prosthetic")
+                    } else {
+                        (INTACT, "intact")
+                    };
+                    Some(Series {
+                        curve: c,
+                        color,
+                        label: format!("{role} ({}, n={})", side.as_str(), c.n_cycles),
+                        band: true,
+                    })
                 })
                 .collect();
             panel(area, &title(joint), &series)?;
@@ -167,7 +234,16 @@ impl Draw for Kinematics<'_> {
 /// Hip, knee and ankle angles over the gait cycle, mean and SD band,
 /// prosthetic (red) against intact (blue) side.
 pub fn kinematics_plot(curves: &[CycleCurve], prosthetic_side: Side) -> Result<Figure, EvalError> {
-    render(&Kinematics { curves, prosthetic: prosthetic_side }, "kinematics", 1200, 400, None)
+    render(
+        &Kinematics {
+            curves,
+            prosthetic: prosthetic_side,
+        },
+        "kinematics",
+        1200,
+        400,
+        None,
+    )
 }
 
 struct Comparison<'a> {
@@ -177,21 +253,47 @@ struct Comparison<'a> {
 }
 
 impl Draw for Comparison<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, _bitmap: bool) -> Result<(), String> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        _bitmap: bool,
+    ) -> Result<(), String> {
         let rows = [self.prosthetic, self.prosthetic.other()];
         for (i, area) in root.split_evenly((2, 3)).iter().enumerate() {
             let (side, joint) = (rows[i / 3], JOINTS[i % 3]);
-            let role = if side == self.prosthetic { "prosthetic" } else { "intact" };
+            let role = if side == self.prosthetic {
+                "prosthetic"
+            } else {
+                "intact"
+            };
             let mut series = Vec::new();
-            if let Some(c) = self.truth.iter().find(|c| c.side == side && c.joint == joint) {
-                series.push(Series { curve: c, color: TRUTH, label: "ground truth".into(), band: true });
+            if let Some(c) = self
+                .truth
+                .iter()
+                .find(|c| c.side == side && c.joint == joint)
+            {
+                series.push(Series {
+                    curve: c,
+                    color: TRUTH,
+                    label: "ground truth".into(),
+                    band: true,
+                });
             }
             for (k, (name, curves)) in self.methods.iter().enumerate() {
                 if let Some(c) = curves.iter().find(|c| c.side == side && c.joint == joint) {
-                    series.push(Series { curve: c, color: PALETTE[k % PALETTE.len()], label: name.clone(), band: false });
+                    series.push(Series {
+                        curve: c,
+                        color: PALETTE[k % PALETTE.len()],
+                        label: name.clone(),
+                        band: false,
+                    });
                 }
             }
-            panel(area, &format!("{} – {role} ({})", title(joint), side.as_str()), &series)?;
+            panel(
+                area,
+                &format!("{} – {role} ({})", title(joint), side.as_str()),
+                &series,
+            )?;
         }
         Ok(())
     }
@@ -199,6 +301,20 @@ impl Draw for Comparison<'_> {
 
 /// Methods against ground truth over the gait cycle: rows prosthetic and
 /// intact side, columns hip, knee, ankle; truth green with its SD band.
-pub fn comparison_plot(truth: &[CycleCurve], methods: &[(String, Vec<CycleCurve>)], prosthetic_side: Side) -> Result<Figure, EvalError> {
-    render(&Comparison { truth, methods, prosthetic: prosthetic_side }, "comparison", 1200, 720, None)
+pub fn comparison_plot(
+    truth: &[CycleCurve],
+    methods: &[(String, Vec<CycleCurve>)],
+    prosthetic_side: Side,
+) -> Result<Figure, EvalError> {
+    render(
+        &Comparison {
+            truth,
+            methods,
+            prosthetic: prosthetic_side,
+        },
+        "comparison",
+        1200,
+        720,
+        None,
+    )
 }

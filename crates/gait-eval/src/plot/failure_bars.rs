@@ -30,7 +30,11 @@ fn distinct(items: impl Iterator<Item = String>) -> Vec<String> {
 }
 
 impl Draw for Bars<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, _bitmap: bool) -> Result<(), String> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        _bitmap: bool,
+    ) -> Result<(), String> {
         let views = distinct(self.entries.iter().map(|e| e.view.clone()));
         let methods = distinct(self.entries.iter().map(|e| e.method.clone()));
         type Pick = fn(&Failures) -> f64;
@@ -62,7 +66,11 @@ impl Draw for Bars<'_> {
                 .x_labels(nv)
                 .x_label_formatter(&|x: &f64| {
                     let i = x.round();
-                    if (x - i).abs() < 1e-6 && i >= 0.0 { views_ref.get(i as usize).cloned().unwrap_or_default() } else { String::new() }
+                    if (x - i).abs() < 1e-6 && i >= 0.0 {
+                        views_ref.get(i as usize).cloned().unwrap_or_default()
+                    } else {
+                        String::new()
+                    }
                 })
                 .label_style((FONT, 12))
                 .draw()
@@ -76,14 +84,19 @@ impl Draw for Bars<'_> {
                     .filter_map(|e| {
                         let v = views.iter().position(|x| *x == e.view)? as f64;
                         let x0 = v - 0.4 + m as f64 * width;
-                        Some(Rectangle::new([(x0, 0.0), (x0 + width * 0.9, pick(&e.failures))], color.filled()))
+                        Some(Rectangle::new(
+                            [(x0, 0.0), (x0 + width * 0.9, pick(&e.failures))],
+                            color.filled(),
+                        ))
                     })
                     .collect();
                 chart
                     .draw_series(bars)
                     .map_err(err)?
                     .label(method.clone())
-                    .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
+                    .legend(move |(x, y)| {
+                        Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled())
+                    });
             }
             chart
                 .configure_series_labels()

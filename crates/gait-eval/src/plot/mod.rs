@@ -8,8 +8,8 @@ mod skeleton;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 
-use plotters::prelude::*;
 use plotters::coord::Shift;
+use plotters::prelude::*;
 
 pub use cycles::{CycleCurve, comparison_plot, kinematics_plot, read_cycles_csv};
 pub use failure_bars::{FailureEntry, failure_bars};
@@ -55,7 +55,11 @@ impl Figure {
 
 /// Something drawable on any plotters backend.
 pub(crate) trait Draw {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, bitmap: bool) -> Result<(), String>;
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        bitmap: bool,
+    ) -> Result<(), String>;
 }
 
 fn err<E: std::fmt::Debug>(e: E) -> String {
@@ -64,34 +68,52 @@ fn err<E: std::fmt::Debug>(e: E) -> String {
 
 /// Renders `d` at `w` x `h` pixels as SVG and as PNG (over `background`
 /// when given: an RGB image of exactly that size).
-pub(crate) fn render(d: &impl Draw, name: &str, w: u32, h: u32, background: Option<image::RgbImage>) -> Result<Figure, EvalError> {
+pub(crate) fn render(
+    d: &impl Draw,
+    name: &str,
+    w: u32,
+    h: u32,
+    background: Option<image::RgbImage>,
+) -> Result<Figure, EvalError> {
     register_font();
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| EvalError::plot(name, err(e)))?;
+        root.fill(&WHITE)
+            .map_err(|e| EvalError::plot(name, err(e)))?;
         d.draw(&root, false).map_err(|e| EvalError::plot(name, e))?;
         root.present().map_err(|e| EvalError::plot(name, err(e)))?;
     }
     let has_background = background.is_some();
     let mut buf = match background {
         Some(img) if img.dimensions() == (w, h) => img.into_raw(),
-        Some(_) => return Err(EvalError::plot(name, "background size differs from the figure")),
+        Some(_) => {
+            return Err(EvalError::plot(
+                name,
+                "background size differs from the figure",
+            ));
+        }
         None => vec![255u8; (w * h * 3) as usize],
     };
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         if !has_background {
-            root.fill(&WHITE).map_err(|e| EvalError::plot(name, err(e)))?;
+            root.fill(&WHITE)
+                .map_err(|e| EvalError::plot(name, err(e)))?;
         }
         d.draw(&root, true).map_err(|e| EvalError::plot(name, e))?;
         root.present().map_err(|e| EvalError::plot(name, err(e)))?;
     }
-    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| EvalError::plot(name, "pixel buffer size"))?;
+    let img = image::RgbImage::from_raw(w, h, buf)
+        .ok_or_else(|| EvalError::plot(name, "pixel buffer size"))?;
     let mut png = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
         .map_err(|e| EvalError::plot(name, e))?;
-    Ok(Figure { name: name.to_string(), svg, png })
+    Ok(Figure {
+        name: name.to_string(),
+        svg,
+        png,
+    })
 }
 
 /// Line colours: intact blue, prosthetic red (as in the paper's figures).
@@ -109,7 +131,11 @@ pub(crate) const PALETTE: [RGBColor; 5] = [
 
 /// Range of finite values padded by 5 %, or (-1, 1) when there are none.
 pub(crate) fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
     if !lo.is_finite() {
         return (-1.0, 1.0);
     }

@@ -22,7 +22,10 @@ pub struct StripOptions {
 
 impl Default for StripOptions {
     fn default() -> Self {
-        Self { max_frames: 6, height: 360 }
+        Self {
+            max_frames: 6,
+            height: 360,
+        }
     }
 }
 
@@ -71,23 +74,40 @@ fn colour(name: &str) -> RGBColor {
 }
 
 impl Draw for Strip {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, _bitmap: bool) -> Result<(), String> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        _bitmap: bool,
+    ) -> Result<(), String> {
         for p in &self.panels {
             let at = |(x, y): (f64, f64)| -> (i32, i32) {
-                ((p.x_offset + (x - p.origin.0) * p.scale).round() as i32, ((y - p.origin.1) * p.scale).round() as i32)
+                (
+                    (p.x_offset + (x - p.origin.0) * p.scale).round() as i32,
+                    ((y - p.origin.1) * p.scale).round() as i32,
+                )
             };
             for (a, b) in BONES {
                 if let (Some(&pa), Some(&pb)) = (p.points.get(a), p.points.get(b)) {
-                    let c = if colour(a) == colour(b) { colour(a) } else { colour(b) };
-                    root.draw(&PathElement::new(vec![at(pa), at(pb)], c.stroke_width(3))).map_err(err)?;
+                    let c = if colour(a) == colour(b) {
+                        colour(a)
+                    } else {
+                        colour(b)
+                    };
+                    root.draw(&PathElement::new(vec![at(pa), at(pb)], c.stroke_width(3)))
+                        .map_err(err)?;
                 }
             }
             for (name, &pt) in &p.points {
-                root.draw(&Circle::new(at(pt), 4, colour(name).filled())).map_err(err)?;
+                root.draw(&Circle::new(at(pt), 4, colour(name).filled()))
+                    .map_err(err)?;
             }
             let x = p.x_offset.round() as i32;
-            root.draw(&Text::new(format!("frame {}", p.frame), (x + 6, 6), (FONT, 16).into_font().color(&BLACK)))
-                .map_err(err)?;
+            root.draw(&Text::new(
+                format!("frame {}", p.frame),
+                (x + 6, 6),
+                (FONT, 16).into_font().color(&BLACK),
+            ))
+            .map_err(err)?;
         }
         Ok(())
     }
@@ -97,14 +117,29 @@ impl Draw for Strip {
 /// the skeleton drawn over them (left blue, right red). Frames are taken from
 /// `images` by index; where an image is missing the skeleton is drawn on
 /// white. The SVG holds the skeletons only; the PNG has the frames too.
-pub fn skeleton_strip(seq: &PoseSequence, images: &[Frame], opts: &StripOptions) -> Result<Figure, EvalError> {
+pub fn skeleton_strip(
+    seq: &PoseSequence,
+    images: &[Frame],
+    opts: &StripOptions,
+) -> Result<Figure, EvalError> {
     if seq.is_empty() || opts.max_frames == 0 || opts.height < 16 {
-        return Err(EvalError::plot("skeleton_strip", "no frames to draw (or max_frames 0 / height below 16 pixels)"));
+        return Err(EvalError::plot(
+            "skeleton_strip",
+            "no frames to draw (or max_frames 0 / height below 16 pixels)",
+        ));
     }
     let none = BTreeMap::new();
     let canonical: Vec<Option<String>> = seq.names.iter().map(|n| to_canonical(n, &none)).collect();
     let n = opts.max_frames.min(seq.len());
-    let rows: Vec<usize> = (0..n).map(|i| if n == 1 { 0 } else { i * (seq.len() - 1) / (n - 1) }).collect();
+    let rows: Vec<usize> = (0..n)
+        .map(|i| {
+            if n == 1 {
+                0
+            } else {
+                i * (seq.len() - 1) / (n - 1)
+            }
+        })
+        .collect();
     let h = f64::from(opts.height);
     let mut panels = Vec::with_capacity(n);
     let mut tiles: Vec<(u32, Option<RgbImage>)> = Vec::with_capacity(n);
@@ -120,11 +155,21 @@ pub fn skeleton_strip(seq: &PoseSequence, images: &[Frame], opts: &StripOptions)
             Some(f) if f.height() > 0 && f.width() > 0 => {
                 let s = h / f64::from(f.height());
                 let w = ((f64::from(f.width()) * s).round() as u32).max(1);
-                let tile = image::imageops::resize(&f.image, w, opts.height, image::imageops::FilterType::Triangle);
+                let tile = image::imageops::resize(
+                    &f.image,
+                    w,
+                    opts.height,
+                    image::imageops::FilterType::Triangle,
+                );
                 ((0.0, 0.0), s, w, Some(tile))
             }
             _ => {
-                let (mut x0, mut y0, mut x1, mut y1) = (f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+                let (mut x0, mut y0, mut x1, mut y1) = (
+                    f64::INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                );
                 for &(x, y) in points.values() {
                     (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
                 }
@@ -140,7 +185,13 @@ pub fn skeleton_strip(seq: &PoseSequence, images: &[Frame], opts: &StripOptions)
                 ((cx, y0 - pad), s, w, None)
             }
         };
-        panels.push(Panel { frame, x_offset, origin, scale, points });
+        panels.push(Panel {
+            frame,
+            x_offset,
+            origin,
+            scale,
+            points,
+        });
         tiles.push((width, tile));
         x_offset += f64::from(width);
     }
@@ -153,5 +204,11 @@ pub fn skeleton_strip(seq: &PoseSequence, images: &[Frame], opts: &StripOptions)
         }
         x += i64::from(*w);
     }
-    render(&Strip { panels }, "skeleton_strip", total_w, opts.height, Some(background))
+    render(
+        &Strip { panels },
+        "skeleton_strip",
+        total_w,
+        opts.height,
+        Some(background),
+    )
 }
