@@ -88,6 +88,8 @@ def main(out):
         else:
             P[:, j, :2] = truth["LHip"] + np.array([rng.uniform(-50, 50), -rng.uniform(20, 300)])
         P[:, j, 2] = rng.uniform(0.6, 1.0, N_PRED)
+    for nm in ("LHeel", "RHeel", "LSmallToe", "RSmallToe"):  # not labelled in the truth: not found
+        P[:, BODY_25.index(nm)] = 0.0
     lower = [s + p for s in "LR" for p in PARTS]
     for f in (10, 11, 12):                        # right knee not found
         P[f, BODY_25.index("RKnee")] = 0.0

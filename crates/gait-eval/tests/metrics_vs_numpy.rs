@@ -219,12 +219,14 @@ fn kinematics_through_gait_kin() {
     }
     let e = gait_eval::evaluate(&truth, &pred, &post, &kin, &opts).unwrap();
     let k = e.kinematics.as_ref().unwrap();
-    for l in &k.legs {
-        let m = l.stat.mean.unwrap();
+    // 4 px keypoint noise on ~100 px segments plus the injected failures
+    // (right ankle misplaced in two frames), after gait-kin's filtering.
+    for j in &k.joints {
+        let m = j.deg.mean.unwrap();
         eprintln!(
-            "{:?} leg angle MAE through gait-kin: {m:.2} deg (n={})",
-            l.side, l.stat.n
+            "{} angle MAE through gait-kin: {m:.2} deg (n={})",
+            j.joint, j.deg.n
         );
-        assert!(m > 0.0 && m < 30.0, "{:?} leg angle MAE {m}", l.side);
+        assert!(m > 0.0 && m < 20.0, "{} angle MAE {m}", j.joint);
     }
 }
