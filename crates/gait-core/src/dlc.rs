@@ -106,13 +106,12 @@ pub fn read<R: Read>(input: R, individual: Option<&str>, fps: f64) -> Result<Pos
     // Column triples (x, y, likelihood) per body part, in file order.
     let mut names: Vec<String> = Vec::new();
     let mut columns: Vec<[Option<usize>; 3]> = Vec::new();
-    for col in 1..bodyparts.len() {
+    for (col, part) in bodyparts.iter().enumerate().skip(1) {
         if let (Some(ind), Some(want)) = (&individuals, &chosen)
             && ind.get(col) != Some(want)
         {
             continue;
         }
-        let part = &bodyparts[col];
         let slot = match coords.get(col).map(String::as_str) {
             Some("x") => 0,
             Some("y") => 1,
