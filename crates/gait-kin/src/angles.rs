@@ -41,7 +41,9 @@ impl Angles {
 /// Inclination of `from -> to` in degrees, or NaN.
 fn inclination(t: &Tracks, from: Option<usize>, to: Option<usize>, i: usize, d: f64) -> f64 {
     match (from.and_then(|j| t.at(j, i)), to.and_then(|j| t.at(j, i))) {
-        (Some(a), Some(b)) if (a.0, a.1) != (b.0, b.1) => (d * (b.0 - a.0)).atan2(b.1 - a.1).to_degrees(),
+        (Some(a), Some(b)) if (a.0, a.1) != (b.0, b.1) => {
+            (d * (b.0 - a.0)).atan2(b.1 - a.1).to_degrees()
+        }
         _ => f64::NAN,
     }
 }
@@ -56,7 +58,13 @@ fn wrap(a: f64) -> f64 {
 pub fn compute(t: &Tracks, dirs: &[Direction]) -> Angles {
     let leg = |side: Side| {
         let idx = |p: &str| t.leg_index(side, p);
-        let (hip, knee, ankle, heel, toe) = (idx("hip"), idx("knee"), idx("ankle"), idx("heel"), idx("toe"));
+        let (hip, knee, ankle, heel, toe) = (
+            idx("hip"),
+            idx("knee"),
+            idx("ankle"),
+            idx("heel"),
+            idx("toe"),
+        );
         let mut out = LegAngles::default();
         for (i, dir) in dirs.iter().enumerate().take(t.len()) {
             let d = dir.sign();
@@ -91,7 +99,7 @@ mod tests {
     fn leg(thigh: f64, shank: f64, foot_from_shank: f64, dir: f64) -> Tracks {
         let names: Vec<String> = LEG.iter().map(|p| format!("right_{p}")).collect();
         let r = |deg: f64, len: f64| {
-            let a = (deg as f64).to_radians();
+            let a = deg.to_radians();
             (dir * len * a.sin(), len * a.cos())
         };
         let hip = (500.0, 100.0);

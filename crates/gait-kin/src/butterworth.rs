@@ -20,11 +20,17 @@ impl C {
         C::new(self.re - o.re, self.im - o.im)
     }
     fn mul(self, o: C) -> C {
-        C::new(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
+        C::new(
+            self.re * o.re - self.im * o.im,
+            self.re * o.im + self.im * o.re,
+        )
     }
     fn div(self, o: C) -> C {
         let d = o.re * o.re + o.im * o.im;
-        C::new((self.re * o.re + self.im * o.im) / d, (self.im * o.re - self.re * o.im) / d)
+        C::new(
+            (self.re * o.re + self.im * o.im) / d,
+            (self.im * o.re - self.re * o.im) / d,
+        )
     }
 }
 
@@ -45,7 +51,10 @@ pub fn design_lowpass(order: usize, cutoff_hz: f64, fs: f64) -> (Vec<f64>, Vec<f
     let wn = 2.0 * cutoff_hz / fs;
     let fs_norm = 2.0;
     let warped = 2.0 * fs_norm * (std::f64::consts::PI * wn / fs_norm).tan();
-    let p: Vec<C> = poles.iter().map(|p| C::new(p.re * warped, p.im * warped)).collect();
+    let p: Vec<C> = poles
+        .iter()
+        .map(|p| C::new(p.re * warped, p.im * warped))
+        .collect();
     let k = warped.powi(order as i32);
     // Bilinear transform with fs2 = 2 * fs_norm; all zeros land at z = -1.
     let fs2 = C::new(2.0 * fs_norm, 0.0);
@@ -175,6 +184,9 @@ mod tests {
         // Shorter than scipy's padding: still finite and near the straight line.
         let short: Vec<f64> = (0..5).map(|i| i as f64).collect();
         let y = filtfilt(&b, &a, &short);
-        assert!(y.iter().zip(&short).all(|(a, b)| (a - b).abs() < 0.2), "{y:?}");
+        assert!(
+            y.iter().zip(&short).all(|(a, b)| (a - b).abs() < 0.2),
+            "{y:?}"
+        );
     }
 }

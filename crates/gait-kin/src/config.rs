@@ -114,7 +114,8 @@ impl PostprocessConfig {
 
     /// Rejects values no analysis can run with.
     pub fn validate(&self, fps: f64) -> Result<(), KinError> {
-        let bad = |key: &str, why: String| Err(KinError::Config(format!("postprocess.{key}: {why}")));
+        let bad =
+            |key: &str, why: String| Err(KinError::Config(format!("postprocess.{key}: {why}")));
         if !(0.0..=1.0).contains(&self.likelihood_threshold) {
             return bad("likelihood_threshold", "must be in [0, 1]".into());
         }
@@ -128,7 +129,10 @@ impl PostprocessConfig {
             if !(self.cutoff_hz > 0.0 && self.cutoff_hz < fps / 2.0) {
                 return bad(
                     "cutoff_hz",
-                    format!("{} Hz must be above 0 and below half the frame rate ({} fps)", self.cutoff_hz, fps),
+                    format!(
+                        "{} Hz must be above 0 and below half the frame rate ({} fps)",
+                        self.cutoff_hz, fps
+                    ),
                 );
             }
         }
@@ -202,7 +206,10 @@ impl KinematicsConfig {
             }
         }
         if self.known_length_m.is_some() != self.known_length_px.is_some() {
-            return bad("known_length_m", "set together with known_length_px (or neither)");
+            return bad(
+                "known_length_m",
+                "set together with known_length_px (or neither)",
+            );
         }
         if !(self.min_stride_s > 0.0 && self.max_stride_s > self.min_stride_s) {
             return bad("max_stride_s", "need 0 < min_stride_s < max_stride_s");
@@ -219,7 +226,10 @@ mod tests {
     fn defaults_are_the_papers() {
         let p = PostprocessConfig::default();
         assert_eq!(p.likelihood_threshold, 0.5);
-        assert_eq!((p.filter, p.butterworth_order, p.cutoff_hz), (FilterKind::Butterworth, 4, 6.0));
+        assert_eq!(
+            (p.filter, p.butterworth_order, p.cutoff_hz),
+            (FilterKind::Butterworth, 4, 6.0)
+        );
         assert_eq!(p.gap_fill, GapFillKind::CubicSpline);
         assert_eq!(p.max_gap(30.0), 10);
         assert!(p.validate(30.0).is_ok());
@@ -228,13 +238,19 @@ mod tests {
 
     #[test]
     fn toml_round_trip_and_unknown_keys() {
-        let p: PostprocessConfig = toml::from_str("filter = \"one_euro\"\nmax_gap_frames = 5").unwrap();
+        let p: PostprocessConfig =
+            toml::from_str("filter = \"one_euro\"\nmax_gap_frames = 5").unwrap();
         assert_eq!((p.filter, p.max_gap(30.0)), (FilterKind::OneEuro, 5));
-        let k: KinematicsConfig = toml::from_str("prosthetic_side = \"right\"\nsubject_height_m = 1.8").unwrap();
+        let k: KinematicsConfig =
+            toml::from_str("prosthetic_side = \"right\"\nsubject_height_m = 1.8").unwrap();
         assert_eq!(k.prosthetic_side, Some(Side::Right));
-        let e = toml::from_str::<PostprocessConfig>("cutof_hz = 6").unwrap_err().to_string();
+        let e = toml::from_str::<PostprocessConfig>("cutof_hz = 6")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("cutof_hz") && e.contains("cutoff_hz"), "{e}");
-        let e = toml::from_str::<PostprocessConfig>("filter = \"kalman\"").unwrap_err().to_string();
+        let e = toml::from_str::<PostprocessConfig>("filter = \"kalman\"")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("butterworth") && e.contains("one_euro"), "{e}");
         let back: KinematicsConfig = toml::from_str(&toml::to_string(&k).unwrap()).unwrap();
         assert_eq!(back, k);

@@ -41,7 +41,11 @@ pub fn strides(events: &[Event], fps: f64, min_s: f64, max_s: f64) -> Vec<Stride
         for w in hs.windows(2) {
             let dur = (w[1] - w[0]) as f64 / fps;
             if dur >= min_s && dur <= max_s {
-                out.push(Stride { side, start: w[0], end: w[1] });
+                out.push(Stride {
+                    side,
+                    start: w[0],
+                    end: w[1],
+                });
             }
         }
     }
@@ -51,7 +55,10 @@ pub fn strides(events: &[Event], fps: f64, min_s: f64, max_s: f64) -> Vec<Stride
 /// `series` (indexed from `first_frame`) resampled linearly at 101 points over the stride;
 /// `None` when any needed sample is missing.
 pub fn resample(series: &[f64], first_frame: usize, s: &Stride) -> Option<Vec<f64>> {
-    let (a, b) = (s.start.checked_sub(first_frame)?, s.end.checked_sub(first_frame)?);
+    let (a, b) = (
+        s.start.checked_sub(first_frame)?,
+        s.end.checked_sub(first_frame)?,
+    );
     if b >= series.len() || b <= a {
         return None;
     }
@@ -62,7 +69,11 @@ pub fn resample(series: &[f64], first_frame: usize, s: &Stride) -> Option<Vec<f6
             let i = pos.floor() as usize;
             let f = pos - i as f64;
             let lo = series[i];
-            let v = if f == 0.0 { lo } else { lo * (1.0 - f) + series[(i + 1).min(b)] * f };
+            let v = if f == 0.0 {
+                lo
+            } else {
+                lo * (1.0 - f) + series[(i + 1).min(b)] * f
+            };
             v.is_finite().then_some(v)
         })
         .collect()
@@ -96,7 +107,9 @@ pub fn curves(
                 ));
                 continue;
             }
-            let mean: Vec<f64> = (0..=100).map(|p| cycles.iter().map(|c| c[p]).sum::<f64>() / n as f64).collect();
+            let mean: Vec<f64> = (0..=100)
+                .map(|p| cycles.iter().map(|c| c[p]).sum::<f64>() / n as f64)
+                .collect();
             let sd = (0..=100)
                 .map(|p| {
                     if n < 2 {
@@ -106,7 +119,13 @@ pub fn curves(
                     (ss / (n - 1) as f64).sqrt()
                 })
                 .collect();
-            out.push(CycleCurve { side, joint, mean, sd, n_cycles: n });
+            out.push(CycleCurve {
+                side,
+                joint,
+                mean,
+                sd,
+                n_cycles: n,
+            });
         }
     }
     out
@@ -118,10 +137,26 @@ mod tests {
 
     #[test]
     fn strides_and_resampling() {
-        let hs = |side, frame| Event { side, event: EventKind::HeelStrike, frame };
-        let ev = [hs(Side::Left, 10), hs(Side::Left, 40), hs(Side::Left, 200), hs(Side::Right, 25)];
+        let hs = |side, frame| Event {
+            side,
+            event: EventKind::HeelStrike,
+            frame,
+        };
+        let ev = [
+            hs(Side::Left, 10),
+            hs(Side::Left, 40),
+            hs(Side::Left, 200),
+            hs(Side::Right, 25),
+        ];
         let s = strides(&ev, 30.0, 0.5, 3.0);
-        assert_eq!(s, vec![Stride { side: Side::Left, start: 10, end: 40 }]);
+        assert_eq!(
+            s,
+            vec![Stride {
+                side: Side::Left,
+                start: 10,
+                end: 40
+            }]
+        );
         let series: Vec<f64> = (0..50).map(|i| i as f64).collect();
         let r = resample(&series, 5, &s[0]).unwrap();
         assert_eq!((r[0], r[50], r[100]), (5.0, 20.0, 35.0));

@@ -48,6 +48,17 @@ pub struct Directions {
     pub frontal: Vec<bool>,
 }
 
+/// -1, 0 or +1 (`f64::signum` gives +1 for 0).
+fn sign(v: f64) -> f64 {
+    if v > 0.0 {
+        1.0
+    } else if v < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
 /// Walking direction from the pelvis' horizontal velocity (over +-0.1 s) when it moves faster
 /// than 0.2 leg lengths per second, otherwise from which way the feet point (heel -> toe);
 /// then a majority vote over +-0.25 s removes flicker. Frames whose hip width exceeds half
@@ -91,10 +102,10 @@ pub fn detect(t: &Tracks) -> Directions {
             if let (Some(h), Some(k)) = (t.leg_index(side, "heel"), t.leg_index(side, "toe"))
                 && let (Some(a), Some(b)) = (t.at(h, i), t.at(k, i))
             {
-                foot += (b.0 - a.0).signum();
+                foot += sign(b.0 - a.0);
             }
         }
-        raw[i] = foot.signum();
+        raw[i] = sign(foot);
     }
     let half = ((0.25 * fps).round() as usize).max(1);
     let per_frame = (0..n)

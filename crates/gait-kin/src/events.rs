@@ -171,7 +171,11 @@ impl ZeniRefined {
                 if !(va.is_finite() && vb.is_finite()) {
                     return p;
                 }
-                let crossed = if forward { va > target && vb <= target } else { va <= target && vb > target };
+                let crossed = if forward {
+                    va > target && vb <= target
+                } else {
+                    va <= target && vb > target
+                };
                 if crossed {
                     let f = (va - target) / (va - vb);
                     return if f < 0.5 { a } else { b };
@@ -189,13 +193,21 @@ impl ZeniRefined {
         for p in find_peaks(&heel_rel, prom, min_dist) {
             if stable(p) {
                 let frame = refine(heel, p, true);
-                out.push(Event { side, event: EventKind::HeelStrike, frame: t.first_frame + frame });
+                out.push(Event {
+                    side,
+                    event: EventKind::HeelStrike,
+                    frame: t.first_frame + frame,
+                });
             }
         }
         for p in find_peaks(&toe_back, prom, min_dist) {
             if stable(p) {
                 let frame = refine(toe, p, false);
-                out.push(Event { side, event: EventKind::ToeOff, frame: t.first_frame + frame });
+                out.push(Event {
+                    side,
+                    event: EventKind::ToeOff,
+                    frame: t.first_frame + frame,
+                });
             }
         }
         out
@@ -208,7 +220,10 @@ impl EventDetector for ZeniRefined {
         if !leg.is_finite() || t.fps <= 0.0 {
             return Vec::new();
         }
-        let mut ev: Vec<Event> = Side::BOTH.iter().flat_map(|&s| self.side_events(t, dirs, s, leg)).collect();
+        let mut ev: Vec<Event> = Side::BOTH
+            .iter()
+            .flat_map(|&s| self.side_events(t, dirs, s, leg))
+            .collect();
         sort(&mut ev);
         ev
     }
@@ -221,7 +236,10 @@ pub fn sort(ev: &mut [Event]) {
 
 /// Reads `side,event,frame[,time_s]` (header required; extra columns ignored).
 pub fn read_csv(path: &Path) -> Result<Vec<Event>, KinError> {
-    let bad = |why: String| KinError::EventsCsv { path: path.to_path_buf(), reason: why };
+    let bad = |why: String| KinError::EventsCsv {
+        path: path.to_path_buf(),
+        reason: why,
+    };
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
@@ -247,11 +265,18 @@ pub fn read_csv(path: &Path) -> Result<Vec<Event>, KinError> {
         let event = match get(ce) {
             "heel_strike" => EventKind::HeelStrike,
             "toe_off" => EventKind::ToeOff,
-            s => return Err(bad(format!("line {line}: event `{s}` is not heel_strike or toe_off"))),
+            s => {
+                return Err(bad(format!(
+                    "line {line}: event `{s}` is not heel_strike or toe_off"
+                )));
+            }
         };
-        let frame = get(cf)
-            .parse::<usize>()
-            .map_err(|_| bad(format!("line {line}: frame `{}` is not a frame number", get(cf))))?;
+        let frame = get(cf).parse::<usize>().map_err(|_| {
+            bad(format!(
+                "line {line}: frame `{}` is not a frame number",
+                get(cf)
+            ))
+        })?;
         out.push(Event { side, event, frame });
     }
     sort(&mut out);
@@ -276,9 +301,20 @@ mod tests {
     fn reads_and_rejects_event_files() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("e.csv");
-        std::fs::write(&p, "side,event,frame,time_s\nright,toe_off,20,0.6\nleft,heel_strike,3,0.1\n").unwrap();
+        std::fs::write(
+            &p,
+            "side,event,frame,time_s\nright,toe_off,20,0.6\nleft,heel_strike,3,0.1\n",
+        )
+        .unwrap();
         let ev = read_csv(&p).unwrap();
-        assert_eq!(ev[0], Event { side: Side::Left, event: EventKind::HeelStrike, frame: 3 });
+        assert_eq!(
+            ev[0],
+            Event {
+                side: Side::Left,
+                event: EventKind::HeelStrike,
+                frame: 3
+            }
+        );
         std::fs::write(&p, "side,event,frame\nleft,foot_flat,3\n").unwrap();
         let e = read_csv(&p).unwrap_err().to_string();
         assert!(e.contains("foot_flat") && e.contains("line 2"), "{e}");

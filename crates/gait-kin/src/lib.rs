@@ -107,7 +107,11 @@ pub struct Steps<'a> {
 }
 
 /// Runs the configured chain (see the crate docs).
-pub fn analyse(seq: &PoseSequence, post: &PostprocessConfig, kin: &KinematicsConfig) -> Result<KinResult, KinError> {
+pub fn analyse(
+    seq: &PoseSequence,
+    post: &PostprocessConfig,
+    kin: &KinematicsConfig,
+) -> Result<KinResult, KinError> {
     let gate = LikelihoodThreshold(post.likelihood_threshold);
     let swap = ContinuitySwap;
     let gap: Box<dyn GapFiller> = match post.gap_fill {
@@ -116,7 +120,10 @@ pub fn analyse(seq: &PoseSequence, post: &PostprocessConfig, kin: &KinematicsCon
         GapFillKind::None => Box::new(spline::NoFill),
     };
     let smoother: Box<dyn Smoother> = match post.filter {
-        FilterKind::Butterworth => Box::new(butterworth::Butterworth { order: post.butterworth_order, cutoff_hz: post.cutoff_hz }),
+        FilterKind::Butterworth => Box::new(butterworth::Butterworth {
+            order: post.butterworth_order,
+            cutoff_hz: post.cutoff_hz,
+        }),
         FilterKind::OneEuro => Box::new(one_euro::OneEuro {
             min_cutoff_hz: post.one_euro_min_cutoff_hz,
             beta: post.one_euro_beta,
@@ -124,7 +131,10 @@ pub fn analyse(seq: &PoseSequence, post: &PostprocessConfig, kin: &KinematicsCon
         }),
         FilterKind::None => Box::new(smooth::Identity),
     };
-    let detector = ZeniRefined { min_stride_s: kin.min_stride_s, ..ZeniRefined::default() };
+    let detector = ZeniRefined {
+        min_stride_s: kin.min_stride_s,
+        ..ZeniRefined::default()
+    };
     let steps = Steps {
         gate: &gate,
         swap: post.swap_correction.then_some(&swap as &dyn SwapCorrector),
@@ -144,17 +154,24 @@ pub fn analyse_with(
 ) -> Result<KinResult, KinError> {
     let fps = seq.fps;
     if !(fps.is_finite() && fps > 0.0) {
-        return Err(KinError::BadInput(format!("frame rate {fps} is not a positive number")));
+        return Err(KinError::BadInput(format!(
+            "frame rate {fps} is not a positive number"
+        )));
     }
     post.validate(fps)?;
     kin.validate()?;
     if seq.frames.len() != seq.poses.len() {
-        return Err(KinError::BadInput("frames and poses differ in length".into()));
+        return Err(KinError::BadInput(
+            "frames and poses differ in length".into(),
+        ));
     }
     if let (Some(lo), Some(hi)) = (seq.frames.iter().min(), seq.frames.iter().max())
         && hi - lo > 10 * seq.frames.len() + 10_000
     {
-        return Err(KinError::BadInput(format!("frame numbers {lo}..{hi} are too sparse for {} poses", seq.len())));
+        return Err(KinError::BadInput(format!(
+            "frame numbers {lo}..{hi} are too sparse for {} poses",
+            seq.len()
+        )));
     }
     let mut warnings = Vec::new();
     let mut t = Tracks::from_sequence(seq);
@@ -163,11 +180,22 @@ pub fn analyse_with(
         warnings.push("no frames in the input".into());
     }
     steps.gate.apply(&mut t);
+    if n > 0 && t.x.iter().all(|x| x.iter().all(|v| !v.is_finite())) {
+        warnings.push(format!(
+            "no keypoint with likelihood >= {} in any frame",
+            post.likelihood_threshold
+        ));
+    }
 
-    let swapped = steps.swap.map(|s| s.correct(&mut t)).unwrap_or_else(|| vec![false; n]);
+    let swapped = steps
+        .swap
+        .map(|s| s.correct(&mut t))
+        .unwrap_or_else(|| vec![false; n]);
     let swapped_frames = swapped.iter().filter(|&&s| s).count();
     if swapped_frames > 0 {
-        warnings.push(format!("left/right leg labels corrected in {swapped_frames} frames"));
+        warnings.push(format!(
+            "left/right leg labels corrected in {swapped_frames} frames"
+        ));
     }
 
     let max_gap = post.max_gap(fps);
@@ -214,7 +242,8 @@ pub fn analyse_with(
         ));
     }
     if n > 0 && counts[2] == n {
-        warnings.push("walking direction unknown in every frame: no angles, events or cycles".into());
+        warnings
+            .push("walking direction unknown in every frame: no angles, events or cycles".into());
     }
     let near_side = match counts[0].cmp(&counts[1]) {
         std::cmp::Ordering::Greater => Direction::Right.near_side(),
@@ -228,12 +257,21 @@ pub fn analyse_with(
         None => (steps.events.detect(&t, &dirs.per_frame), false),
     };
     for side in Side::BOTH {
-        if !events.iter().any(|e| e.side == side && e.event == EventKind::HeelStrike) {
+        if !events
+            .iter()
+            .any(|e| e.side == side && e.event == EventKind::HeelStrike)
+        {
             warnings.push(format!("no heel strike found for the {} leg", side.name()));
         }
     }
     let strides = cycles::strides(&events, fps, kin.min_stride_s, kin.max_stride_s);
-    let cycles = cycles::curves(&angles, t.first_frame, &strides, kin.min_cycles, &mut warnings);
+    let cycles = cycles::curves(
+        &angles,
+        t.first_frame,
+        &strides,
+        kin.min_cycles,
+        &mut warnings,
+    );
     let spatiotemporal = spatiotemporal::compute(&t, &events, &strides, kin);
     let px_per_cm = spatiotemporal::px_per_cm(&t, kin);
     if (kin.subject_height_m.is_some() || kin.known_length_px.is_some()) && px_per_cm.is_none() {

@@ -16,7 +16,7 @@ impl KeypointGate for LikelihoodThreshold {
         for j in 0..t.names.len() {
             for i in 0..t.len() {
                 let l = t.likelihood[j][i];
-                if !(l >= self.0) {
+                if l.is_nan() || l < self.0 {
                     t.x[j][i] = f64::NAN;
                     t.y[j][i] = f64::NAN;
                     t.likelihood[j][i] = 0.0;

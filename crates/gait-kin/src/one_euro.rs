@@ -41,9 +41,19 @@ mod tests {
 
     #[test]
     fn reduces_jitter_and_tracks_constants() {
-        let f = OneEuro { min_cutoff_hz: 1.0, beta: 0.0, d_cutoff_hz: 1.0 };
-        assert!(f.smooth(&[5.0; 20], 30.0).iter().all(|v| (v - 5.0).abs() < 1e-12));
-        let noisy: Vec<f64> = (0..200).map(|i| if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let f = OneEuro {
+            min_cutoff_hz: 1.0,
+            beta: 0.0,
+            d_cutoff_hz: 1.0,
+        };
+        assert!(
+            f.smooth(&[5.0; 20], 30.0)
+                .iter()
+                .all(|v| (v - 5.0).abs() < 1e-12)
+        );
+        let noisy: Vec<f64> = (0..200)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
         let y = f.smooth(&noisy, 30.0);
         let tail = y[100..].iter().map(|v| v.abs()).fold(0.0, f64::max);
         assert!(tail < 0.2, "{tail}");

@@ -8,19 +8,34 @@ use crate::{KinError, KinResult};
 
 /// Number cell: empty when undefined.
 fn num(v: f64) -> String {
-    if v.is_finite() { format!("{v:.6}") } else { String::new() }
+    if v.is_finite() {
+        format!("{v:.6}")
+    } else {
+        String::new()
+    }
 }
 
 /// Writes `name` in `dir` through `dir/.name.partial`, so a crash never leaves a complete-looking file.
-fn atomic(dir: &Path, name: &str, fill: impl FnOnce(&mut Vec<u8>) -> Result<(), KinError>) -> Result<(), KinError> {
-    let io = |what: String| move |e: std::io::Error| KinError::Io { context: what, source: e };
+fn atomic(
+    dir: &Path,
+    name: &str,
+    fill: impl FnOnce(&mut Vec<u8>) -> Result<(), KinError>,
+) -> Result<(), KinError> {
+    let io = |what: String| {
+        move |e: std::io::Error| KinError::Io {
+            context: what,
+            source: e,
+        }
+    };
     let mut buf = Vec::new();
     fill(&mut buf)?;
     let tmp = dir.join(format!(".{name}.partial"));
     let dst = dir.join(name);
     let mut f = fs::File::create(&tmp).map_err(io(format!("creating {}", tmp.display())))?;
-    f.write_all(&buf).map_err(io(format!("writing {}", tmp.display())))?;
-    f.sync_all().map_err(io(format!("writing {}", tmp.display())))?;
+    f.write_all(&buf)
+        .map_err(io(format!("writing {}", tmp.display())))?;
+    f.sync_all()
+        .map_err(io(format!("writing {}", tmp.display())))?;
     fs::rename(&tmp, &dst).map_err(io(format!("renaming to {}", dst.display())))
 }
 
@@ -33,16 +48,32 @@ fn lines(buf: &mut Vec<u8>, rows: impl IntoIterator<Item = String>) {
 
 /// Writes angles.csv, events.csv, cycles.csv, spatiotemporal.csv and keypoints_filtered.csv.
 pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
-    fs::create_dir_all(out_dir).map_err(|e| KinError::Io { context: format!("creating {}", out_dir.display()), source: e })?;
+    fs::create_dir_all(out_dir).map_err(|e| KinError::Io {
+        context: format!("creating {}", out_dir.display()),
+        source: e,
+    })?;
     let fps = r.fps;
     atomic(out_dir, "angles.csv", |b| {
         let a = &r.angles;
-        lines(b, ["frame,time_s,left_hip,right_hip,left_knee,right_knee,left_ankle,right_ankle".to_string()]);
+        lines(
+            b,
+            [
+                "frame,time_s,left_hip,right_hip,left_knee,right_knee,left_ankle,right_ankle"
+                    .to_string(),
+            ],
+        );
         lines(
             b,
             (0..a.left.hip.len()).map(|i| {
                 let f = r.first_frame + i;
-                let cols = [&a.left.hip, &a.right.hip, &a.left.knee, &a.right.knee, &a.left.ankle, &a.right.ankle];
+                let cols = [
+                    &a.left.hip,
+                    &a.right.hip,
+                    &a.left.knee,
+                    &a.right.knee,
+                    &a.left.ankle,
+                    &a.right.ankle,
+                ];
                 let mut row = format!("{f},{}", num(f as f64 / fps));
                 for c in cols {
                     row.push(',');
@@ -57,9 +88,15 @@ pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
         lines(b, ["side,event,frame,time_s".to_string()]);
         lines(
             b,
-            r.events
-                .iter()
-                .map(|e| format!("{},{},{},{}", e.side.name(), e.event.name(), e.frame, num(e.frame as f64 / fps))),
+            r.events.iter().map(|e| {
+                format!(
+                    "{},{},{},{}",
+                    e.side.name(),
+                    e.event.name(),
+                    e.frame,
+                    num(e.frame as f64 / fps)
+                )
+            }),
         );
         Ok(())
     })?;
@@ -69,7 +106,14 @@ pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
             lines(
                 b,
                 (0..c.mean.len()).map(|p| {
-                    format!("{},{},{p},{},{},{}", c.side.name(), c.joint, num(c.mean[p]), num(c.sd[p]), c.n_cycles)
+                    format!(
+                        "{},{},{p},{},{},{}",
+                        c.side.name(),
+                        c.joint,
+                        num(c.mean[p]),
+                        num(c.sd[p]),
+                        c.n_cycles
+                    )
                 }),
             );
         }
@@ -79,9 +123,17 @@ pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
         lines(b, ["parameter,side,mean,sd,n,unit".to_string()]);
         lines(
             b,
-            r.spatiotemporal
-                .iter()
-                .map(|p| format!("{},{},{},{},{},{}", p.parameter, p.side, num(p.mean), num(p.sd), p.n, p.unit)),
+            r.spatiotemporal.iter().map(|p| {
+                format!(
+                    "{},{},{},{},{},{}",
+                    p.parameter,
+                    p.side,
+                    num(p.mean),
+                    num(p.sd),
+                    p.n,
+                    p.unit
+                )
+            }),
         );
         Ok(())
     })?;

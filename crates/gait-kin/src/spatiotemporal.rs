@@ -29,7 +29,11 @@ fn stats(v: &[f64]) -> (f64, f64) {
         return (f64::NAN, f64::NAN);
     }
     let mean = v.iter().sum::<f64>() / n as f64;
-    let sd = if n < 2 { f64::NAN } else { (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt() };
+    let sd = if n < 2 {
+        f64::NAN
+    } else {
+        (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
+    };
     (mean, sd)
 }
 
@@ -44,7 +48,12 @@ pub fn px_per_cm(t: &Tracks, cfg: &KinematicsConfig) -> Option<f64> {
 }
 
 /// All parameters; lengths in cm when a scale is known, else in px.
-pub fn compute(t: &Tracks, events: &[Event], strides: &[Stride], cfg: &KinematicsConfig) -> Vec<Param> {
+pub fn compute(
+    t: &Tracks,
+    events: &[Event],
+    strides: &[Stride],
+    cfg: &KinematicsConfig,
+) -> Vec<Param> {
     let fps = t.fps;
     let scale = px_per_cm(t, cfg);
     let (len_unit, per) = match scale {
@@ -53,7 +62,9 @@ pub fn compute(t: &Tracks, events: &[Event], strides: &[Stride], cfg: &Kinematic
     };
     let heel_x = |side: Side, frame: usize| -> Option<f64> {
         let i = frame.checked_sub(t.first_frame)?;
-        let j = t.leg_index(side, "heel").or_else(|| t.leg_index(side, "ankle"))?;
+        let j = t
+            .leg_index(side, "heel")
+            .or_else(|| t.leg_index(side, "ankle"))?;
         t.at(j, i).map(|p| p.0)
     };
     let mut per_side: Vec<(Side, [Vec<f64>; 6])> = Vec::new();
@@ -65,10 +76,12 @@ pub fn compute(t: &Tracks, events: &[Event], strides: &[Stride], cfg: &Kinematic
         for s in strides.iter().filter(|s| s.side == side) {
             let dur = (s.end - s.start) as f64 / fps;
             stride_t.push(dur);
-            if let Some(to) = events
-                .iter()
-                .find(|e| e.side == side && e.event == EventKind::ToeOff && e.frame > s.start && e.frame < s.end)
-            {
+            if let Some(to) = events.iter().find(|e| {
+                e.side == side
+                    && e.event == EventKind::ToeOff
+                    && e.frame > s.start
+                    && e.frame < s.end
+            }) {
                 stance.push(100.0 * (to.frame - s.start) as f64 / (s.end - s.start) as f64);
             }
             if let (Some(a), Some(b)) = (heel_x(side, s.start), heel_x(side, s.end)) {
@@ -80,19 +93,27 @@ pub fn compute(t: &Tracks, events: &[Event], strides: &[Stride], cfg: &Kinematic
         // Step: from the other foot's heel strike to this foot's next one.
         let mut step_t = Vec::new();
         let mut step_len = Vec::new();
-        let hs: Vec<&Event> = events.iter().filter(|e| e.event == EventKind::HeelStrike).collect();
+        let hs: Vec<&Event> = events
+            .iter()
+            .filter(|e| e.event == EventKind::HeelStrike)
+            .collect();
         for w in hs.windows(2) {
             if w[1].side == side && w[0].side != side {
                 let dur = (w[1].frame - w[0].frame) as f64 / fps;
                 if dur > 0.0 && dur <= cfg.max_stride_s / 2.0 {
                     step_t.push(dur);
-                    if let (Some(a), Some(b)) = (heel_x(side, w[1].frame), heel_x(side.other(), w[1].frame)) {
+                    if let (Some(a), Some(b)) =
+                        (heel_x(side, w[1].frame), heel_x(side.other(), w[1].frame))
+                    {
                         step_len.push((a - b).abs() / per);
                     }
                 }
             }
         }
-        per_side.push((side, [stride_t, step_t, stance, stride_len, step_len, speed]));
+        per_side.push((
+            side,
+            [stride_t, step_t, stance, stride_len, step_len, speed],
+        ));
     }
     let names = [
         ("stride_time", "s"),
@@ -105,10 +126,23 @@ pub fn compute(t: &Tracks, events: &[Event], strides: &[Stride], cfg: &Kinematic
     let mut out = Vec::new();
     let row = |parameter: &str, side: &str, v: &[f64], unit: &str| {
         let (mean, sd) = stats(v);
-        Param { parameter: parameter.into(), side: side.into(), mean, sd, n: v.len(), unit: unit.into() }
+        Param {
+            parameter: parameter.into(),
+            side: side.into(),
+            mean,
+            sd,
+            n: v.len(),
+            unit: unit.into(),
+        }
     };
-    let all_steps: Vec<f64> = per_side.iter().flat_map(|(_, p)| p[1].iter().copied()).collect();
-    let all_strides: Vec<f64> = per_side.iter().flat_map(|(_, p)| p[0].iter().copied()).collect();
+    let all_steps: Vec<f64> = per_side
+        .iter()
+        .flat_map(|(_, p)| p[1].iter().copied())
+        .collect();
+    let all_strides: Vec<f64> = per_side
+        .iter()
+        .flat_map(|(_, p)| p[0].iter().copied())
+        .collect();
     let cadence: Vec<f64> = if !all_steps.is_empty() {
         all_steps.iter().map(|s| 60.0 / s).collect()
     } else {
@@ -126,7 +160,12 @@ pub fn compute(t: &Tracks, events: &[Event], strides: &[Stride], cfg: &Kinematic
         Some(p) => (p, p.other(), "prosthetic_vs_intact"),
         None => (Side::Left, Side::Right, "left_vs_right"),
     };
-    let mean_of = |side: Side, k: usize| per_side.iter().find(|(s, _)| *s == side).map(|(_, p)| stats(&p[k]).0);
+    let mean_of = |side: Side, k: usize| {
+        per_side
+            .iter()
+            .find(|(s, _)| *s == side)
+            .map(|(_, p)| stats(&p[k]).0)
+    };
     for (k, (name, _)) in names.iter().enumerate() {
         if let (Some(xa), Some(xb)) = (mean_of(a, k), mean_of(b, k)) {
             let si = 100.0 * (xa - xb) / (0.5 * (xa + xb));

@@ -26,7 +26,11 @@ fn gaps(x: &[f64]) -> Vec<(usize, usize, bool)> {
 
 /// A gap in the middle of a present track, too long to fill: reported. Missing data at the ends
 /// is not a gap (the person is not yet or no longer tracked).
-fn fill_with(x: &mut [f64], max_gap: usize, mut value: impl FnMut(usize) -> f64) -> Vec<(usize, usize)> {
+fn fill_with(
+    x: &mut [f64],
+    max_gap: usize,
+    mut value: impl FnMut(usize) -> f64,
+) -> Vec<(usize, usize)> {
     let mut left = Vec::new();
     for (start, len, interior) in gaps(x) {
         if !interior {
@@ -36,8 +40,8 @@ fn fill_with(x: &mut [f64], max_gap: usize, mut value: impl FnMut(usize) -> f64)
             left.push((start, len));
             continue;
         }
-        for i in start..start + len {
-            x[i] = value(i);
+        for (i, v) in x.iter_mut().enumerate().skip(start).take(len) {
+            *v = value(i);
         }
     }
     left
@@ -49,11 +53,18 @@ pub struct CubicSplineFill;
 
 impl GapFiller for CubicSplineFill {
     fn fill(&self, x: &mut [f64], max_gap: usize) -> Vec<(usize, usize)> {
-        let t: Vec<f64> = (0..x.len()).filter(|&i| x[i].is_finite()).map(|i| i as f64).collect();
+        let t: Vec<f64> = (0..x.len())
+            .filter(|&i| x[i].is_finite())
+            .map(|i| i as f64)
+            .collect();
         let y: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
         match CubicSpline::new(&t, &y) {
             Some(s) => fill_with(x, max_gap, |i| s.eval(i as f64)),
-            None => gaps(x).into_iter().filter(|g| g.2).map(|(s, l, _)| (s, l)).collect(),
+            None => gaps(x)
+                .into_iter()
+                .filter(|g| g.2)
+                .map(|(s, l, _)| (s, l))
+                .collect(),
         }
     }
 }
@@ -67,7 +78,9 @@ impl GapFiller for LinearFill {
         let src = x.to_vec();
         fill_with(x, max_gap, |i| {
             let lo = (0..i).rev().find(|&j| src[j].is_finite()).unwrap_or(i);
-            let hi = (i + 1..src.len()).find(|&j| src[j].is_finite()).unwrap_or(i);
+            let hi = (i + 1..src.len())
+                .find(|&j| src[j].is_finite())
+                .unwrap_or(i);
             if lo == hi {
                 return f64::NAN;
             }
@@ -156,7 +169,11 @@ impl CubicSpline {
     pub fn eval(&self, x: f64) -> f64 {
         let last = self.c.len() - 1;
         // Interval i with t[i] <= x < t[i+1]; the last one also takes x >= t[last].
-        let i = self.t.partition_point(|&k| k <= x).saturating_sub(1).min(last);
+        let i = self
+            .t
+            .partition_point(|&k| k <= x)
+            .saturating_sub(1)
+            .min(last);
         let d = x - self.t[i];
         let c = self.c[i];
         ((c[0] * d + c[1]) * d + c[2]) * d + c[3]
@@ -174,8 +191,9 @@ fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
         b.swap(col, piv);
         for r in col + 1..3 {
             let f = a[r][col] / a[col][col];
-            for k in col..3 {
-                a[r][k] -= f * a[col][k];
+            let pivot_row = a[col];
+            for (ark, ack) in a[r].iter_mut().zip(pivot_row).skip(col) {
+                *ark -= f * ack;
             }
             b[r] -= f * b[col];
         }
@@ -193,9 +211,13 @@ fn solve_tridiagonal(lower: &[f64], diag: &[f64], upper: &[f64], b: &[f64]) -> O
     let n = diag.len();
     // Row i holds (d[i], u1[i], u2[i]) at columns i, i+1, i+2 after elimination.
     let mut d = diag.to_vec();
-    let mut u1: Vec<f64> = (0..n).map(|i| if i + 1 < n { upper[i] } else { 0.0 }).collect();
+    let mut u1: Vec<f64> = (0..n)
+        .map(|i| if i + 1 < n { upper[i] } else { 0.0 })
+        .collect();
     let mut u2 = vec![0.0; n];
-    let mut l: Vec<f64> = (0..n).map(|i| if i + 1 < n { lower[i + 1] } else { 0.0 }).collect();
+    let mut l: Vec<f64> = (0..n)
+        .map(|i| if i + 1 < n { lower[i + 1] } else { 0.0 })
+        .collect();
     let mut rhs = b.to_vec();
     for i in 0..n - 1 {
         // Row i+1 currently: l[i] at column i, d[i+1] at i+1, u1[i+1] at i+2.

@@ -27,12 +27,21 @@ fn leg_pairs(t: &Tracks) -> Vec<[usize; 2]> {
 impl ContinuitySwap {
     /// Cost of labelling frame `i` with `s` given labels `s1` at `i-1` and `s2` at `i-2`,
     /// or `None` when no keypoint links frame `i` to frame `i-1`.
-    fn cost(t: &Tracks, pairs: &[[usize; 2]], i: usize, s: usize, s1: usize, s2: usize) -> Option<f64> {
+    fn cost(
+        t: &Tracks,
+        pairs: &[[usize; 2]],
+        i: usize,
+        s: usize,
+        s1: usize,
+        s2: usize,
+    ) -> Option<f64> {
         let mut total = 0.0;
         let mut linked = false;
         for pair in pairs {
             let both = |f: usize| Some((t.at(pair[0], f)?, t.at(pair[1], f)?));
-            let (Some(now), Some(prev)) = (both(i), both(i - 1)) else { continue };
+            let (Some(now), Some(prev)) = (both(i), both(i - 1)) else {
+                continue;
+            };
             linked = true;
             let before = if i >= 2 { both(i - 2) } else { None };
             let pick = |p: ((f64, f64), (f64, f64)), leg: usize, swapped: usize| {
@@ -91,7 +100,9 @@ impl ContinuitySwap {
             let m = next.iter().copied().fold(f64::INFINITY, f64::min);
             score = next.map(|v| v - m);
         }
-        let mut state = (0..4).min_by(|&a, &b| score[a].total_cmp(&score[b])).unwrap_or(0);
+        let mut state = (0..4)
+            .min_by(|&a, &b| score[a].total_cmp(&score[b]))
+            .unwrap_or(0);
         let mut swapped = vec![false; n];
         for i in (0..n).rev() {
             swapped[i] = state & 1 == 1;
@@ -119,7 +130,10 @@ impl ContinuitySwap {
         }
         // A frame with no leg keypoint on either side cannot be "swapped".
         for (i, s) in swapped.iter_mut().enumerate() {
-            if !pairs.iter().any(|p| t.at(p[0], i).is_some() || t.at(p[1], i).is_some()) {
+            if !pairs
+                .iter()
+                .any(|p| t.at(p[0], i).is_some() || t.at(p[1], i).is_some())
+            {
                 *s = false;
             }
         }

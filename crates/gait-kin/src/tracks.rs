@@ -23,7 +23,11 @@ impl Tracks {
     pub fn from_sequence(seq: &PoseSequence) -> Self {
         let first = seq.frames.iter().copied().min().unwrap_or(0);
         let last = seq.frames.iter().copied().max().unwrap_or(0);
-        let len = if seq.frames.is_empty() { 0 } else { last - first + 1 };
+        let len = if seq.frames.is_empty() {
+            0
+        } else {
+            last - first + 1
+        };
         let k = seq.names.len();
         let mut t = Self {
             fps: seq.fps,
@@ -39,7 +43,11 @@ impl Tracks {
                 if kp.is_found() {
                     t.x[j][i] = kp.x;
                     t.y[j][i] = kp.y;
-                    t.likelihood[j][i] = if kp.likelihood.is_finite() { kp.likelihood } else { 0.0 };
+                    t.likelihood[j][i] = if kp.likelihood.is_finite() {
+                        kp.likelihood
+                    } else {
+                        0.0
+                    };
                 }
             }
         }
@@ -99,8 +107,12 @@ impl Tracks {
         if let Some(p) = self.index("mid_hip").and_then(|j| self.at(j, i)) {
             return Some(p);
         }
-        let l = self.leg_index(Side::Left, "hip").and_then(|j| self.at(j, i));
-        let r = self.leg_index(Side::Right, "hip").and_then(|j| self.at(j, i));
+        let l = self
+            .leg_index(Side::Left, "hip")
+            .and_then(|j| self.at(j, i));
+        let r = self
+            .leg_index(Side::Right, "hip")
+            .and_then(|j| self.at(j, i));
         match (l, r) {
             (Some(a), Some(b)) => Some(((a.0 + b.0) / 2.0, (a.1 + b.1) / 2.0)),
             (a, b) => a.or(b),
@@ -112,7 +124,9 @@ impl Tracks {
         let mut lengths = Vec::new();
         for side in Side::BOTH {
             let idx = ["hip", "knee", "ankle"].map(|p| self.leg_index(side, p));
-            let [Some(h), Some(k), Some(a)] = idx else { continue };
+            let [Some(h), Some(k), Some(a)] = idx else {
+                continue;
+            };
             for i in 0..self.len() {
                 if let (Some(h), Some(k), Some(a)) = (self.at(h, i), self.at(k, i), self.at(a, i)) {
                     lengths.push(dist(h, k) + dist(k, a));
@@ -135,7 +149,11 @@ pub fn median(v: &mut Vec<f64>) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { (v[n / 2 - 1] + v[n / 2]) / 2.0 }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
 }
 
 #[cfg(test)]
@@ -149,8 +167,12 @@ mod tests {
             names: vec!["left_hip".into(), "right_hip".into()],
             frames: vec![3, 5],
             poses: vec![
-                Pose { keypoints: vec![Keypoint::new(1.0, 2.0, 0.9), Keypoint::new(3.0, 2.0, 0.8)] },
-                Pose { keypoints: vec![Keypoint::missing(), Keypoint::new(4.0, 4.0, 0.7)] },
+                Pose {
+                    keypoints: vec![Keypoint::new(1.0, 2.0, 0.9), Keypoint::new(3.0, 2.0, 0.8)],
+                },
+                Pose {
+                    keypoints: vec![Keypoint::missing(), Keypoint::new(4.0, 4.0, 0.7)],
+                },
             ],
         };
         let t = Tracks::from_sequence(&seq);
