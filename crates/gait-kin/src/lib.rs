@@ -210,7 +210,7 @@ pub fn analyse_with(
         }
         for (start, len) in left {
             warnings.push(format!(
-                "gap of {len} frames in {} (from frame {}) left empty",
+                "gap of {len} frames in {} (from frame {}) left empty (longer than {max_gap})",
                 t.names[j],
                 t.first_frame + start
             ));

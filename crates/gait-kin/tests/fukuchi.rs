@@ -395,3 +395,75 @@ fn outputs_are_written_in_the_documented_layout() {
             .ends_with(".partial")
     }));
 }
+
+#[test]
+fn known_length_scaling_gives_the_mocap_walking_speed() {
+    let seq = sequence();
+    // The derivation maps 2 mm to 1 px: 1 m is 500 px.
+    let kin = KinematicsConfig {
+        known_length_m: Some(1.0),
+        known_length_px: Some(500.0),
+        ..Default::default()
+    };
+    let r = analyse(&seq, &PostprocessConfig::default(), &kin).unwrap();
+    assert_eq!(r.px_per_cm, Some(5.0));
+    // Independent reference: the pelvis (mean of the hip markers) displacement over the trial.
+    let t = Tracks::from_sequence(&seq);
+    let (a, b) = (t.pelvis(0).unwrap(), t.pelvis(t.len() - 1).unwrap());
+    let pelvis_cm_s = (b.0 - a.0) / 5.0 / ((t.len() - 1) as f64 / 150.0);
+    for side in ["left", "right"] {
+        let speed = r
+            .spatiotemporal
+            .iter()
+            .find(|p| p.parameter == "speed" && p.side == side)
+            .unwrap();
+        assert_eq!(speed.unit, "cm/s");
+        let rel = (speed.mean - pelvis_cm_s).abs() / pelvis_cm_s;
+        println!(
+            "{side} stride speed {:.1} cm/s, pelvis {pelvis_cm_s:.1} cm/s",
+            speed.mean
+        );
+        assert!(rel < 0.05, "{side}: {} vs {pelvis_cm_s}", speed.mean);
+    }
+}
+
+#[test]
+fn events_file_overrides_detection_and_long_gaps_are_reported() {
+    let mut seq = sequence();
+    let k = seq.index_of("right_knee").unwrap();
+    for p in &mut seq.poses[100..160] {
+        p.keypoints[k] = gait_core::Keypoint::missing();
+    }
+    for p in &mut seq.poses[200..205] {
+        p.keypoints[k].likelihood = 0.1;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let events = dir.path().join("events.csv");
+    std::fs::write(
+        &events,
+        "side,event,frame\nleft,heel_strike,10\nleft,heel_strike,170\nleft,heel_strike,330\n",
+    )
+    .unwrap();
+    let kin = KinematicsConfig {
+        events_csv: Some(events),
+        ..Default::default()
+    };
+    let r = analyse(&seq, &PostprocessConfig::default(), &kin).unwrap();
+    assert!(r.events_from_file);
+    assert_eq!(r.events.len(), 3);
+    assert_eq!(r.strides.len(), 2);
+    assert_eq!(r.cycles.iter().filter(|c| c.side == Side::Left).count(), 3);
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w
+                == "gap of 60 frames in right_knee (from frame 100) left empty (longer than 50)"),
+        "{:?}",
+        r.warnings
+    );
+    assert!(
+        !r.warnings.iter().any(|w| w.contains("from frame 200")),
+        "the 5-frame gap is filled"
+    );
+    assert!(r.angles.right.knee[130].is_nan() && r.angles.right.knee[202].is_finite());
+}
