@@ -2,6 +2,7 @@
 //! `[pose]` table of a pipeline config by `kind`.
 
 pub mod blazepose;
+pub mod tflite;
 
 use std::path::PathBuf;
 

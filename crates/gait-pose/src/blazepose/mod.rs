@@ -1,9 +1,48 @@
-//! MediaPipe BlazePose (full): person detector + 33-landmark model.
+//! MediaPipe BlazePose (full): person detector + 33-landmark model, run on
+//! candle (pure Rust, straight from the `.tflite` files) or on ONNX Runtime.
+
+mod anchors;
+mod detection;
+mod estimator;
+pub mod fetch;
+mod landmarks;
+mod names;
+mod net;
+mod ort_net;
+mod roi;
+mod warp;
 
 use std::path::PathBuf;
 
 use gait_core::{Backend, PoseEstimator, StageContext, StageError};
 use serde::{Deserialize, Serialize};
+
+pub use estimator::Blazepose;
+pub use names::NATIVE;
+pub use net::{DETECTOR_FILE, LANDMARK_FILE};
+
+/// Runs one network (`.tflite` file `model`, or its ONNX export for ort) on
+/// one NHWC input; returns its raw outputs flattened, in graph order. For
+/// checks and benchmarks; the estimator wraps this.
+pub fn raw_outputs(model: &std::path::Path, backend: Backend, input: &[f32]) -> Result<Vec<Vec<f32>>, StageError> {
+    net::load(model, backend)?.run(input)
+}
+
+/// Which person to follow when several are in view. The choice is made when a
+/// person is (re-)detected; tracking then keeps to the same person.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PersonChoice {
+    /// The biggest body (usually the one nearest the camera).
+    #[default]
+    Largest,
+    Leftmost,
+    Rightmost,
+    /// Nearest the image centre.
+    MostCentral,
+    /// The detector's best score (what mediapipe itself does).
+    MostConfident,
+}
 
 /// Keys of `[pose]` when `kind = "blazepose"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -12,6 +51,15 @@ pub struct BlazeposeConfig {
     pub backend: Backend,
     /// Folder holding the model files, relative to the models folder.
     pub model_dir: PathBuf,
+    /// Person to follow when several are in view.
+    pub person: PersonChoice,
+    /// Minimum detector score for a person (mediapipe: 0.5).
+    pub detection_threshold: f32,
+    /// Minimum pose presence to accept landmarks and keep tracking (mediapipe: 0.5).
+    pub presence_threshold: f32,
+    /// Follow the person from the previous frame's landmarks instead of
+    /// detecting in every frame (video mode); re-detects when presence drops.
+    pub tracking: bool,
 }
 
 impl Default for BlazeposeConfig {
@@ -19,33 +67,48 @@ impl Default for BlazeposeConfig {
         Self {
             backend: Backend::Candle,
             model_dir: PathBuf::from("blazepose"),
+            person: PersonChoice::Largest,
+            detection_threshold: 0.5,
+            presence_threshold: 0.5,
+            tracking: true,
         }
     }
 }
 
-/// Model files, relative to `model_dir`.
-const FILES: [&str; 2] = ["pose_detection.tflite", "pose_landmark_full.tflite"];
-
 impl BlazeposeConfig {
+    /// The model files the estimator reads, resolved against the models folder.
     pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
         let dir = ctx.model_path(&self.model_dir);
-        FILES.iter().map(|f| dir.join(f)).collect()
+        let files = [dir.join(DETECTOR_FILE), dir.join(LANDMARK_FILE)];
+        match self.backend {
+            Backend::Candle => files.to_vec(),
+            Backend::Ort => files.iter().flat_map(|f| [f.clone(), net::onnx_path(f)]).collect(),
+        }
     }
 
     pub fn build(&self, ctx: &StageContext) -> Result<Box<dyn PoseEstimator>, StageError> {
-        for path in self.model_files(ctx) {
-            if !path.is_file() {
-                return Err(StageError::MissingModel {
-                    path,
-                    hint: "run `gait models fetch blazepose`".into(),
-                });
-            }
-        }
-        // The networks land with the BlazePose issue; until then the model
-        // files are checked and the run stops here with a clear message.
-        Err(StageError::backend(
-            self.backend.to_string(),
-            "the BlazePose networks are not implemented yet",
-        ))
+        Ok(Box::new(Blazepose::new(self, ctx)?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn config_keys() {
+        let c: BlazeposeConfig = toml::from_str("person = \"most_central\"\ntracking = false").unwrap();
+        assert_eq!(c.person, PersonChoice::MostCentral);
+        assert!(!c.tracking);
+        assert_eq!(c.detection_threshold, 0.5);
+        let err = toml::from_str::<BlazeposeConfig>("persn = 1").unwrap_err().to_string();
+        assert!(err.contains("persn") && err.contains("person"), "{err}");
+    }
+
+    #[test]
+    fn missing_models_name_the_fetch_command() {
+        let ctx = StageContext::new("/nonexistent-models");
+        let err = BlazeposeConfig::default().build(&ctx).err().unwrap().to_string();
+        assert!(err.contains("pose_detection.tflite") && err.contains("gait models fetch blazepose"), "{err}");
     }
 }

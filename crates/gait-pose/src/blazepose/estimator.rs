@@ -1,0 +1,196 @@
+//! The BlazePose pipeline: detect, crop, landmarks, refine, project, track.
+
+use gait_core::{Frame, Pose, PoseEstimator, StageContext, StageError};
+
+use super::anchors::{DETECTOR_SIZE, anchors};
+use super::detection::{self, Detection};
+use super::landmarks::{self, LANDMARK_SIZE, Landmark};
+use super::names;
+use super::net::{self, Net};
+use super::roi::Roi;
+use super::warp::{self, Border, PixelRect};
+use super::{BlazeposeConfig, PersonChoice};
+
+const NMS_IOU: f32 = 0.3;
+const HEATMAP_LEN: usize = 64 * 64 * landmarks::ALL;
+
+/// The BlazePose estimator (implements [`PoseEstimator`]).
+pub struct Blazepose {
+    detector: Box<dyn Net>,
+    landmarker: Box<dyn Net>,
+    anchors: Vec<(f32, f32)>,
+    config: BlazeposeConfig,
+    /// Crop for the next frame, from this frame's landmarks 33/34.
+    track: Option<Roi>,
+    /// Centre of the last person found, to pick the same one on re-detection.
+    last_centre: Option<(f32, f32)>,
+}
+
+/// Raw landmark-model result for one crop.
+pub struct LandmarkResult {
+    pub landmarks: Vec<Landmark>,
+    pub presence: f32,
+}
+
+fn find<'a>(outputs: &'a [Vec<f32>], len: usize, what: &str) -> Result<&'a [f32], StageError> {
+    outputs
+        .iter()
+        .find(|o| o.len() == len)
+        .map(|o| o.as_slice())
+        .ok_or_else(|| StageError::backend("blazepose", format!("no {what} output of {len} values")))
+}
+
+impl Blazepose {
+    /// Loads both networks for the configured backend.
+    pub fn new(config: &BlazeposeConfig, ctx: &StageContext) -> Result<Self, StageError> {
+        let files = config.model_files(ctx);
+        Ok(Self {
+            detector: net::load(&files[0], config.backend)?,
+            landmarker: net::load(&files[1], config.backend)?,
+            anchors: anchors(),
+            config: config.clone(),
+            track: None,
+            last_centre: None,
+        })
+    }
+
+    /// Person detections in normalised image coordinates, best score first.
+    pub fn detect(&mut self, frame: &Frame) -> Result<Vec<Detection>, StageError> {
+        let (w, h) = (frame.width() as f32, frame.height() as f32);
+        let side = w.max(h);
+        let rect = PixelRect {
+            cx: w / 2.0,
+            cy: h / 2.0,
+            w: side,
+            h: side,
+            rotation: 0.0,
+        };
+        let crop = warp::crop(&frame.image, rect, DETECTOR_SIZE, Border::Zero);
+        let input: Vec<f32> = crop.iter().map(|&v| v as f32 * (2.0 / 255.0) - 1.0).collect();
+        let out = self.detector.run(&input)?;
+        let n = self.anchors.len();
+        let regressors = find(&out, n * detection::ROW, "regressor")?;
+        let scores = find(&out, n, "score")?;
+        let dets = detection::decode(regressors, scores, &self.anchors, self.config.detection_threshold);
+        let mut dets = detection::weighted_nms(dets, NMS_IOU);
+        // Undo the letterbox: padding is a fraction of the square side.
+        let (px, py) = ((1.0 - w / side) / 2.0, (1.0 - h / side) / 2.0);
+        let fix = |x: f32, y: f32| ((x - px) / (1.0 - 2.0 * px), (y - py) / (1.0 - 2.0 * py));
+        for d in &mut dets {
+            let (x0, y0) = fix(d.bbox[0], d.bbox[1]);
+            let (x1, y1) = fix(d.bbox[2], d.bbox[3]);
+            d.bbox = [x0, y0, x1, y1];
+            for k in &mut d.keypoints {
+                *k = fix(k.0, k.1);
+            }
+        }
+        Ok(dets)
+    }
+
+    /// Runs the landmark model on the crop `roi` of `frame`.
+    pub fn landmarks(&mut self, frame: &Frame, roi: &Roi) -> Result<LandmarkResult, StageError> {
+        let (w, h) = (frame.width() as f32, frame.height() as f32);
+        let (mut rw, mut rh) = (roi.w * w, roi.h * h);
+        // mediapipe pads the crop to the tensor's (square) aspect ratio.
+        if 1.0 > rh / rw {
+            rh = rw;
+        } else {
+            rw = rh;
+        }
+        let rect = PixelRect {
+            cx: roi.cx * w,
+            cy: roi.cy * h,
+            w: rw,
+            h: rh,
+            rotation: roi.rotation,
+        };
+        let crop = warp::crop(&frame.image, rect, LANDMARK_SIZE, Border::Replicate);
+        let input: Vec<f32> = crop.iter().map(|&v| v as f32 / 255.0).collect();
+        let out = self.landmarker.run(&input)?;
+        let raw = find(&out, landmarks::ALL * 5, "landmark")?;
+        let heatmap = find(&out, HEATMAP_LEN, "heatmap")?;
+        let presence = find(&out, 1, "presence")?[0];
+        Ok(LandmarkResult {
+            landmarks: landmarks::decode(raw, heatmap, roi),
+            presence,
+        })
+    }
+
+    fn choose(&self, dets: &[Detection], width: u32, height: u32) -> Option<Roi> {
+        let rois: Vec<Roi> = dets
+            .iter()
+            .map(|d| Roi::from_alignment(d.keypoints[0], d.keypoints[1], width, height))
+            .collect();
+        let (wf, hf) = (width as f32, height as f32);
+        let dist = |r: &Roi, (x, y): (f32, f32)| ((r.cx - x) * wf).hypot((r.cy - y) * hf);
+        // Re-detection: stay with the person we followed if one is near.
+        if let Some(c) = self.last_centre.filter(|_| self.config.tracking) {
+            let near = rois
+                .iter()
+                .filter(|r| dist(r, c) < r.side_px(width, height))
+                .min_by(|a, b| dist(a, c).total_cmp(&dist(b, c)));
+            if near.is_some() {
+                return near.copied();
+            }
+        }
+        let by = |f: &dyn Fn(&Roi) -> f32| rois.iter().copied().min_by(|a, b| f(a).total_cmp(&f(b)));
+        match self.config.person {
+            PersonChoice::MostConfident => rois.first().copied(),
+            PersonChoice::Largest => by(&|r| -r.side_px(width, height)),
+            PersonChoice::Leftmost => by(&|r| r.cx),
+            PersonChoice::Rightmost => by(&|r| -r.cx),
+            PersonChoice::MostCentral => by(&|r| dist(r, (0.5, 0.5))),
+        }
+    }
+
+    /// The pose in one frame, updating the tracking state.
+    fn estimate_one(&mut self, frame: &Frame) -> Result<Pose, StageError> {
+        let (w, h) = (frame.width(), frame.height());
+        let empty = Pose::empty(names::keypoint_names().len());
+        if w == 0 || h == 0 {
+            return Ok(empty);
+        }
+        let tracked = self.track.take().filter(|_| self.config.tracking);
+        let mut result = None;
+        if let Some(roi) = tracked {
+            let r = self.landmarks(frame, &roi)?;
+            if r.presence >= self.config.presence_threshold {
+                result = Some(r);
+            }
+        }
+        if result.is_none() {
+            let dets = self.detect(frame)?;
+            if let Some(roi) = self.choose(&dets, w, h) {
+                let r = self.landmarks(frame, &roi)?;
+                if r.presence >= self.config.presence_threshold {
+                    result = Some(r);
+                }
+            }
+        }
+        let Some(r) = result else {
+            self.last_centre = None;
+            return Ok(empty);
+        };
+        let lm = &r.landmarks;
+        self.track = Some(Roi::from_alignment((lm[33].x, lm[33].y), (lm[34].x, lm[34].y), w, h));
+        self.last_centre = Some((lm[33].x, lm[33].y));
+        Ok(Pose {
+            keypoints: names::to_keypoints(lm, w, h),
+        })
+    }
+}
+
+impl PoseEstimator for Blazepose {
+    fn keypoint_names(&self) -> Vec<String> {
+        names::keypoint_names()
+    }
+
+    fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError> {
+        frames.iter().map(|f| self.estimate_one(f)).collect()
+    }
+
+    fn reset(&mut self) {
+        self.track = None;
+        self.last_centre = None;
+    }
+}

@@ -1,0 +1,52 @@
+//! The two networks behind one small interface, on either backend.
+
+use std::path::{Path, PathBuf};
+
+use gait_core::{Backend, StageError};
+
+use crate::tflite::{CandleGraph, Graph};
+
+pub const DETECTOR_FILE: &str = "pose_detection.tflite";
+pub const LANDMARK_FILE: &str = "pose_landmark_full.tflite";
+
+/// A network taking one NHWC float image and returning its outputs, flattened.
+pub(crate) trait Net: Send {
+    fn run(&mut self, input: &[f32]) -> Result<Vec<Vec<f32>>, StageError>;
+}
+
+struct CandleNet {
+    graph: CandleGraph,
+}
+
+impl Net for CandleNet {
+    fn run(&mut self, input: &[f32]) -> Result<Vec<Vec<f32>>, StageError> {
+        self.graph.run(input).map_err(|e| StageError::backend("candle", e))
+    }
+}
+
+fn missing(path: &Path) -> StageError {
+    StageError::MissingModel {
+        path: path.to_path_buf(),
+        hint: "run `gait models fetch blazepose` or set model_dir to a folder holding it".into(),
+    }
+}
+
+/// Loads the `.tflite` file at `path` for `backend`.
+pub(crate) fn load(path: &Path, backend: Backend) -> Result<Box<dyn Net>, StageError> {
+    if !path.is_file() {
+        return Err(missing(path));
+    }
+    let graph = Graph::load(path).map_err(|e| StageError::bad_model(path, e))?;
+    match backend {
+        Backend::Candle => {
+            let graph = CandleGraph::new(&graph).map_err(|e| StageError::bad_model(path, e))?;
+            Ok(Box::new(CandleNet { graph }))
+        }
+        Backend::Ort => super::ort_net::load(path, &graph),
+    }
+}
+
+/// Path of the ONNX export next to a `.tflite` file.
+pub(crate) fn onnx_path(tflite: &Path) -> PathBuf {
+    tflite.with_extension("onnx")
+}

@@ -1,0 +1,26 @@
+//! Reading TensorFlow Lite model files (`.tflite` flatbuffers) into an owned
+//! graph: tensors with their constant data (float32, float16, int32, sparse
+//! tensors densified) and operators with their builtin options.
+
+mod candle;
+mod densify;
+mod depthwise;
+mod same;
+mod flatbuf;
+mod model;
+mod onnx;
+
+pub use candle::CandleGraph;
+pub use onnx::to_onnx;
+pub use model::{Activation, DType, Graph, Op, OpOptions, Operator, Padding, Tensor};
+
+/// Why a `.tflite` file cannot be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TfliteError {
+    #[error("not a TFLite model (file identifier {0:?}, expected \"TFL3\")")]
+    Foreign(String),
+    #[error("truncated or corrupt TFLite model: {0}")]
+    Malformed(String),
+    #[error("unsupported TFLite feature: {0}")]
+    Unsupported(String),
+}
