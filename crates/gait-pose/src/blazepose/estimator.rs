@@ -43,7 +43,7 @@ fn find<'a>(outputs: &'a [Vec<f32>], len: usize, what: &str) -> Result<&'a [f32]
 impl Blazepose {
     /// Loads both networks for the configured backend.
     pub fn new(config: &BlazeposeConfig, ctx: &StageContext) -> Result<Self, StageError> {
-        let files = config.model_files(ctx);
+        let files = config.tflite_files(ctx);
         Ok(Self {
             detector: net::load(&files[0], config.backend)?,
             landmarker: net::load(&files[1], config.backend)?,

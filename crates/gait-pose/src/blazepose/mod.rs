@@ -78,12 +78,17 @@ impl Default for BlazeposeConfig {
 impl BlazeposeConfig {
     /// The model files the estimator reads, resolved against the models folder.
     pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
-        let dir = ctx.model_path(&self.model_dir);
-        let files = [dir.join(DETECTOR_FILE), dir.join(LANDMARK_FILE)];
+        let files = self.tflite_files(ctx);
         match self.backend {
             Backend::Candle => files.to_vec(),
             Backend::Ort => files.iter().flat_map(|f| [f.clone(), net::onnx_path(f)]).collect(),
         }
+    }
+
+    /// The detector and landmark `.tflite` files.
+    fn tflite_files(&self, ctx: &StageContext) -> [PathBuf; 2] {
+        let dir = ctx.model_path(&self.model_dir);
+        [dir.join(DETECTOR_FILE), dir.join(LANDMARK_FILE)]
     }
 
     pub fn build(&self, ctx: &StageContext) -> Result<Box<dyn PoseEstimator>, StageError> {

@@ -2,8 +2,10 @@
 //! from the ONNX exports written by [`crate::blazepose::export_onnx`].
 
 use std::path::Path;
+use std::sync::Mutex;
 
 use gait_core::StageError;
+use ort::environment::Environment;
 use ort::session::Session;
 use ort::value::Tensor;
 
@@ -32,6 +34,18 @@ impl Net for OrtNet {
     }
 }
 
+/// ONNX Runtime allows one environment per process; it lives as long as the process.
+fn environment() -> Result<Environment, StageError> {
+    static ENV: Mutex<Option<Environment>> = Mutex::new(None);
+    let mut guard = ENV.lock().map_err(|_| err("environment lock poisoned"))?;
+    if let Some(env) = guard.as_ref() {
+        return Ok(env.clone());
+    }
+    let env = ort::init().build().map_err(err)?;
+    *guard = Some(env.clone());
+    Ok(env)
+}
+
 /// Opens the ONNX file next to the `.tflite` file `tflite` (parsed as `graph`).
 pub(crate) fn load(tflite: &Path, graph: &Graph) -> Result<Box<dyn Net>, StageError> {
     let onnx = onnx_path(tflite);
@@ -46,7 +60,7 @@ pub(crate) fn load(tflite: &Path, graph: &Graph) -> Result<Box<dyn Net>, StageEr
             "ORT_DYLIB_PATH is not set; point it at libonnxruntime.so (from the PyPI onnxruntime wheel)",
         ));
     }
-    let env = ort::init().build().map_err(err)?;
+    let env = environment()?;
     let session = Session::builder(&env)
         .map_err(err)?
         .with_intra_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
