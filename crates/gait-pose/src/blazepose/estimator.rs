@@ -6,10 +6,11 @@ use super::anchors::{DETECTOR_SIZE, anchors};
 use super::detection::{self, Detection};
 use super::landmarks::{self, LANDMARK_SIZE, Landmark};
 use super::names;
+use super::person;
 use super::net::{self, Net};
 use super::roi::Roi;
 use super::warp::{self, Border, PixelRect};
-use super::{BlazeposeConfig, PersonChoice};
+use super::BlazeposeConfig;
 
 const NMS_IOU: f32 = 0.3;
 const HEATMAP_LEN: usize = 64 * 64 * landmarks::ALL;
@@ -116,33 +117,6 @@ impl Blazepose {
         })
     }
 
-    fn choose(&self, dets: &[Detection], width: u32, height: u32) -> Option<Roi> {
-        let rois: Vec<Roi> = dets
-            .iter()
-            .map(|d| Roi::from_alignment(d.keypoints[0], d.keypoints[1], width, height))
-            .collect();
-        let (wf, hf) = (width as f32, height as f32);
-        let dist = |r: &Roi, (x, y): (f32, f32)| ((r.cx - x) * wf).hypot((r.cy - y) * hf);
-        // Re-detection: stay with the person we followed if one is near.
-        if let Some(c) = self.last_centre.filter(|_| self.config.tracking) {
-            let near = rois
-                .iter()
-                .filter(|r| dist(r, c) < r.side_px(width, height))
-                .min_by(|a, b| dist(a, c).total_cmp(&dist(b, c)));
-            if near.is_some() {
-                return near.copied();
-            }
-        }
-        let by = |f: &dyn Fn(&Roi) -> f32| rois.iter().copied().min_by(|a, b| f(a).total_cmp(&f(b)));
-        match self.config.person {
-            PersonChoice::MostConfident => rois.first().copied(),
-            PersonChoice::Largest => by(&|r| -r.side_px(width, height)),
-            PersonChoice::Leftmost => by(&|r| r.cx),
-            PersonChoice::Rightmost => by(&|r| -r.cx),
-            PersonChoice::MostCentral => by(&|r| dist(r, (0.5, 0.5))),
-        }
-    }
-
     /// The pose in one frame, updating the tracking state.
     fn estimate_one(&mut self, frame: &Frame) -> Result<Pose, StageError> {
         let (w, h) = (frame.width(), frame.height());
@@ -160,7 +134,8 @@ impl Blazepose {
         }
         if result.is_none() {
             let dets = self.detect(frame)?;
-            if let Some(roi) = self.choose(&dets, w, h) {
+            let last = self.last_centre.filter(|_| self.config.tracking);
+            if let Some(roi) = person::choose(&dets, self.config.person, last, w, h) {
                 let r = self.landmarks(frame, &roi)?;
                 if r.presence >= self.config.presence_threshold {
                     result = Some(r);

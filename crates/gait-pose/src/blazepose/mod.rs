@@ -9,6 +9,7 @@ mod landmarks;
 mod names;
 mod net;
 mod ort_net;
+mod person;
 mod roi;
 mod warp;
 

@@ -1,0 +1,72 @@
+//! Which detected person to follow.
+
+use super::PersonChoice;
+use super::detection::Detection;
+use super::roi::Roi;
+
+/// The crop of the chosen person among `dets` (best score first) in a
+/// `width` x `height` image. With `last` (the centre of the person followed
+/// until now, normalised), the detection nearest to it wins if it lies within
+/// one crop side, so re-detection keeps to the same person.
+pub fn choose(dets: &[Detection], person: PersonChoice, last: Option<(f32, f32)>, width: u32, height: u32) -> Option<Roi> {
+    let rois: Vec<Roi> = dets
+        .iter()
+        .map(|d| Roi::from_alignment(d.keypoints[0], d.keypoints[1], width, height))
+        .collect();
+    let (wf, hf) = (width as f32, height as f32);
+    let dist = |r: &Roi, (x, y): (f32, f32)| ((r.cx - x) * wf).hypot((r.cy - y) * hf);
+    if let Some(c) = last {
+        let near = rois
+            .iter()
+            .filter(|r| dist(r, c) < r.side_px(width, height))
+            .min_by(|a, b| dist(a, c).total_cmp(&dist(b, c)));
+        if near.is_some() {
+            return near.copied();
+        }
+    }
+    let by = |f: &dyn Fn(&Roi) -> f32| rois.iter().copied().min_by(|a, b| f(a).total_cmp(&f(b)));
+    match person {
+        PersonChoice::MostConfident => rois.first().copied(),
+        PersonChoice::Largest => by(&|r| -r.side_px(width, height)),
+        PersonChoice::Leftmost => by(&|r| r.cx),
+        PersonChoice::Rightmost => by(&|r| -r.cx),
+        PersonChoice::MostCentral => by(&|r| dist(r, (0.5, 0.5))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An upright person with hips at (x, y) and body size `s` (normalised).
+    fn det(score: f32, x: f32, y: f32, s: f32) -> Detection {
+        Detection {
+            score,
+            bbox: [x - s, y - s, x + s, y + s],
+            keypoints: [(x, y), (x, y - s), (x, y - s / 2.0), (x, y - s)],
+        }
+    }
+
+    #[test]
+    fn each_choice() {
+        // Best score first: a small person at the left, a big one right of centre, one far right.
+        let dets = [det(0.9, 0.1, 0.5, 0.05), det(0.8, 0.6, 0.5, 0.2), det(0.7, 0.9, 0.5, 0.1)];
+        let pick = |p| choose(&dets, p, None, 100, 100).unwrap().cx;
+        assert!((pick(PersonChoice::MostConfident) - 0.1).abs() < 1e-6);
+        assert!((pick(PersonChoice::Leftmost) - 0.1).abs() < 1e-6);
+        assert!((pick(PersonChoice::Rightmost) - 0.9).abs() < 1e-6);
+        assert!((pick(PersonChoice::Largest) - 0.6).abs() < 1e-6);
+        assert!((pick(PersonChoice::MostCentral) - 0.6).abs() < 1e-6);
+        assert!(choose(&[], PersonChoice::Largest, None, 100, 100).is_none());
+    }
+
+    #[test]
+    fn re_detection_stays_with_the_followed_person() {
+        let dets = [det(0.9, 0.6, 0.5, 0.2), det(0.8, 0.12, 0.5, 0.05)];
+        let r = choose(&dets, PersonChoice::Largest, Some((0.1, 0.5)), 100, 100).unwrap();
+        assert!((r.cx - 0.12).abs() < 1e-6);
+        // Nobody near the old position: back to the configured choice.
+        let r = choose(&dets[..1], PersonChoice::Leftmost, Some((0.1, 0.9)), 100, 100).unwrap();
+        assert!((r.cx - 0.6).abs() < 1e-6);
+    }
+}
