@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use gait_core::{Backend, Frame, PoseEstimator, StageContext};
+use gait_core::{Backend, Frame, StageContext};
 use gait_pose::blazepose::{BlazeposeConfig, PersonChoice};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -24,9 +24,18 @@ fn main() {
         let shapes: Vec<_> = op
             .inputs
             .iter()
-            .map(|&i| if i < 0 { vec![] } else { g.tensors[i as usize].shape.clone() })
+            .map(|&i| {
+                if i < 0 {
+                    vec![]
+                } else {
+                    g.tensors[i as usize].shape.clone()
+                }
+            })
             .collect();
         let out = &g.tensors[op.outputs[0] as usize];
-        println!("{k} {:?} {:?} -> {:?} {:?}", op.op, shapes, out.shape, op.options);
+        println!(
+            "{k} {:?} {:?} -> {:?} {:?}",
+            op.op, shapes, out.shape, op.options
+        );
     }
 }

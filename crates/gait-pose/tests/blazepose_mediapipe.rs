@@ -29,7 +29,8 @@ const LOWER: std::ops::RangeInclusive<usize> = 23..=32;
 
 fn check(backend: Backend) {
     let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(fixtures().join("mediapipe.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(fixtures().join("mediapipe.json")).unwrap())
+            .unwrap();
     let config = BlazeposeConfig {
         backend,
         person: PersonChoice::MostConfident,
@@ -46,16 +47,34 @@ fn check(backend: Backend) {
         let (w, h) = (frame.width() as f64, frame.height() as f64);
         let pose = est.estimate(&[frame]).unwrap().remove(0);
         let Some(lms) = entry["landmarks"].as_array() else {
-            assert!(pose.keypoints.iter().all(|k| !k.is_found() && k.likelihood == 0.0), "{name}: mediapipe found nobody");
+            assert!(
+                pose.keypoints
+                    .iter()
+                    .all(|k| !k.is_found() && k.likelihood == 0.0),
+                "{name}: mediapipe found nobody"
+            );
             continue;
         };
-        assert!(pose.keypoints[first_native].is_found(), "{name}: no person found");
+        assert!(
+            pose.keypoints[first_native].is_found(),
+            "{name}: no person found"
+        );
         for (i, lm) in lms.iter().enumerate() {
-            let lm: Vec<f64> = lm.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let lm: Vec<f64> = lm
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
             let (ex, ey) = (lm[0] * w - 0.5, lm[1] * h - 0.5);
             let k = pose.keypoints[first_native + i];
             let err = (k.x - ex).hypot(k.y - ey);
-            assert!((k.likelihood - lm[3]).abs() < 0.02, "{name} landmark {i}: visibility {} vs {}", k.likelihood, lm[3]);
+            assert!(
+                (k.likelihood - lm[3]).abs() < 0.02,
+                "{name} landmark {i}: visibility {} vs {}",
+                k.likelihood,
+                lm[3]
+            );
             if LOWER.contains(&i) {
                 lower.push(err);
             }
@@ -65,7 +84,9 @@ fn check(backend: Backend) {
     lower.sort_by(f64::total_cmp);
     let median = lower[lower.len() / 2];
     let max = lower[lower.len() - 1];
-    eprintln!("{backend}: lower-limb error vs mediapipe: median {median:.3} px, max {max:.3} px; all landmarks max {all_max:.3} px");
+    eprintln!(
+        "{backend}: lower-limb error vs mediapipe: median {median:.3} px, max {max:.3} px; all landmarks max {all_max:.3} px"
+    );
     assert!(max <= 1.0, "lower-limb max error {max} px");
     assert!(median <= 0.3, "lower-limb median error {median} px");
 }

@@ -18,7 +18,12 @@ pub const ROW: usize = 12;
 
 /// Detections with score >= `threshold` from raw `regressors` (anchors x 12)
 /// and `scores` (anchors) logits.
-pub fn decode(regressors: &[f32], scores: &[f32], anchors: &[(f32, f32)], threshold: f32) -> Vec<Detection> {
+pub fn decode(
+    regressors: &[f32],
+    scores: &[f32],
+    anchors: &[(f32, f32)],
+    threshold: f32,
+) -> Vec<Detection> {
     let s = DETECTOR_SIZE as f32;
     let mut out = Vec::new();
     for (i, (&(ax, ay), &logit)) in anchors.iter().zip(scores).enumerate() {
@@ -59,7 +64,9 @@ pub fn weighted_nms(mut dets: Vec<Detection>, threshold: f32) -> Vec<Detection> 
     dets.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut out = Vec::new();
     while let Some(top) = dets.first().cloned() {
-        let (cluster, rest): (Vec<_>, Vec<_>) = dets.into_iter().partition(|d| iou(&top.bbox, &d.bbox) > threshold);
+        let (cluster, rest): (Vec<_>, Vec<_>) = dets
+            .into_iter()
+            .partition(|d| iou(&top.bbox, &d.bbox) > threshold);
         dets = rest;
         let total: f32 = cluster.iter().map(|d| d.score).sum();
         let mut merged = top.clone();

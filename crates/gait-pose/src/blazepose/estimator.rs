@@ -2,15 +2,15 @@
 
 use gait_core::{Frame, Pose, PoseEstimator, StageContext, StageError};
 
+use super::BlazeposeConfig;
 use super::anchors::{DETECTOR_SIZE, anchors};
 use super::detection::{self, Detection};
 use super::landmarks::{self, LANDMARK_SIZE, Landmark};
 use super::names;
-use super::person;
 use super::net::{self, Net};
+use super::person;
 use super::roi::Roi;
 use super::warp::{self, Border, PixelRect};
-use super::BlazeposeConfig;
 
 const NMS_IOU: f32 = 0.3;
 const HEATMAP_LEN: usize = 64 * 64 * landmarks::ALL;
@@ -38,7 +38,9 @@ fn find<'a>(outputs: &'a [Vec<f32>], len: usize, what: &str) -> Result<&'a [f32]
         .iter()
         .find(|o| o.len() == len)
         .map(|o| o.as_slice())
-        .ok_or_else(|| StageError::backend("blazepose", format!("no {what} output of {len} values")))
+        .ok_or_else(|| {
+            StageError::backend("blazepose", format!("no {what} output of {len} values"))
+        })
 }
 
 impl Blazepose {
@@ -67,12 +69,20 @@ impl Blazepose {
             rotation: 0.0,
         };
         let crop = warp::crop(&frame.image, rect, DETECTOR_SIZE, Border::Zero);
-        let input: Vec<f32> = crop.iter().map(|&v| v as f32 * (2.0 / 255.0) - 1.0).collect();
+        let input: Vec<f32> = crop
+            .iter()
+            .map(|&v| v as f32 * (2.0 / 255.0) - 1.0)
+            .collect();
         let out = self.detector.run(&input)?;
         let n = self.anchors.len();
         let regressors = find(&out, n * detection::ROW, "regressor")?;
         let scores = find(&out, n, "score")?;
-        let dets = detection::decode(regressors, scores, &self.anchors, self.config.detection_threshold);
+        let dets = detection::decode(
+            regressors,
+            scores,
+            &self.anchors,
+            self.config.detection_threshold,
+        );
         let mut dets = detection::weighted_nms(dets, NMS_IOU);
         // Undo the letterbox: padding is a fraction of the square side.
         let (px, py) = ((1.0 - w / side) / 2.0, (1.0 - h / side) / 2.0);
@@ -147,7 +157,12 @@ impl Blazepose {
             return Ok(empty);
         };
         let lm = &r.landmarks;
-        self.track = Some(Roi::from_alignment((lm[33].x, lm[33].y), (lm[34].x, lm[34].y), w, h));
+        self.track = Some(Roi::from_alignment(
+            (lm[33].x, lm[33].y),
+            (lm[34].x, lm[34].y),
+            w,
+            h,
+        ));
         self.last_centre = Some((lm[33].x, lm[33].y));
         Ok(Pose {
             keypoints: names::to_keypoints(lm, w, h),

@@ -32,9 +32,13 @@ pub const WHEEL_FILES: [(&str, &str); 3] = [
 /// Why fetching the models failed; each message says what to do.
 #[derive(Debug, thiserror::Error)]
 pub enum FetchError {
-    #[error("python3 with pip is needed to download {WHEEL_NAME} ({0}); install python3-pip or copy the .tflite files into the model folder yourself")]
+    #[error(
+        "python3 with pip is needed to download {WHEEL_NAME} ({0}); install python3-pip or copy the .tflite files into the model folder yourself"
+    )]
     NoPip(String),
-    #[error("pip could not download mediapipe==0.10.14: {0}; check the network / PyPI access and retry")]
+    #[error(
+        "pip could not download mediapipe==0.10.14: {0}; check the network / PyPI access and retry"
+    )]
     Download(String),
     #[error("{path}: sha256 {got}, expected {WHEEL_SHA256}; delete the file and retry")]
     Checksum { path: PathBuf, got: String },
@@ -104,7 +108,12 @@ pub fn export_onnx(dir: &Path) -> Result<Vec<PathBuf>, FetchError> {
 fn download(cache: &Path) -> Result<(), FetchError> {
     let out = Command::new("python3")
         .args(["-m", "pip", "download", "--no-deps", "--only-binary=:all:"])
-        .args(["--python-version", "3.11", "--platform", "manylinux_2_17_x86_64"])
+        .args([
+            "--python-version",
+            "3.11",
+            "--platform",
+            "manylinux_2_17_x86_64",
+        ])
         .arg("mediapipe==0.10.14")
         .arg("-d")
         .arg(cache)
@@ -117,7 +126,11 @@ fn download(cache: &Path) -> Result<(), FetchError> {
     if err.contains("No module named pip") {
         return Err(FetchError::NoPip("python3 has no pip module".into()));
     }
-    let last = err.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("");
+    let last = err
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("");
     Err(FetchError::Download(last.trim().to_string()))
 }
 

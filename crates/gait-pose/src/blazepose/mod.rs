@@ -25,7 +25,11 @@ pub use net::{DETECTOR_FILE, LANDMARK_FILE};
 /// Runs one network (`.tflite` file `model`, or its ONNX export for ort) on
 /// one NHWC input; returns its raw outputs flattened, in graph order. For
 /// checks and benchmarks; the estimator wraps this.
-pub fn raw_outputs(model: &std::path::Path, backend: Backend, input: &[f32]) -> Result<Vec<Vec<f32>>, StageError> {
+pub fn raw_outputs(
+    model: &std::path::Path,
+    backend: Backend,
+    input: &[f32],
+) -> Result<Vec<Vec<f32>>, StageError> {
     net::load(model, backend)?.run(input)
 }
 
@@ -82,7 +86,10 @@ impl BlazeposeConfig {
         let files = self.tflite_files(ctx);
         match self.backend {
             Backend::Candle => files.to_vec(),
-            Backend::Ort => files.iter().flat_map(|f| [f.clone(), net::onnx_path(f)]).collect(),
+            Backend::Ort => files
+                .iter()
+                .flat_map(|f| [f.clone(), net::onnx_path(f)])
+                .collect(),
         }
     }
 
@@ -103,18 +110,28 @@ mod tests {
 
     #[test]
     fn config_keys() {
-        let c: BlazeposeConfig = toml::from_str("person = \"most_central\"\ntracking = false").unwrap();
+        let c: BlazeposeConfig =
+            toml::from_str("person = \"most_central\"\ntracking = false").unwrap();
         assert_eq!(c.person, PersonChoice::MostCentral);
         assert!(!c.tracking);
         assert_eq!(c.detection_threshold, 0.5);
-        let err = toml::from_str::<BlazeposeConfig>("persn = 1").unwrap_err().to_string();
+        let err = toml::from_str::<BlazeposeConfig>("persn = 1")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("persn") && err.contains("person"), "{err}");
     }
 
     #[test]
     fn missing_models_name_the_fetch_command() {
         let ctx = StageContext::new("/nonexistent-models");
-        let err = BlazeposeConfig::default().build(&ctx).err().unwrap().to_string();
-        assert!(err.contains("pose_detection.tflite") && err.contains("gait models fetch blazepose"), "{err}");
+        let err = BlazeposeConfig::default()
+            .build(&ctx)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            err.contains("pose_detection.tflite") && err.contains("gait models fetch blazepose"),
+            "{err}"
+        );
     }
 }

@@ -20,7 +20,9 @@ struct CandleNet {
 
 impl Net for CandleNet {
     fn run(&mut self, input: &[f32]) -> Result<Vec<Vec<f32>>, StageError> {
-        self.graph.run(input).map_err(|e| StageError::backend("candle", e))
+        self.graph
+            .run(input)
+            .map_err(|e| StageError::backend("candle", e))
     }
 }
 

@@ -67,7 +67,14 @@ pub(crate) fn load(tflite: &Path, graph: &Graph) -> Result<Box<dyn Net>, StageEr
         .map_err(err)?
         .commit_from_file(&onnx)
         .map_err(err)?;
-    let input = graph.inputs.first().ok_or_else(|| err("graph has no input"))?;
-    let shape = graph.tensors[*input].shape.iter().map(|&d| d as i64).collect();
+    let input = graph
+        .inputs
+        .first()
+        .ok_or_else(|| err("graph has no input"))?;
+    let shape = graph.tensors[*input]
+        .shape
+        .iter()
+        .map(|&d| d as i64)
+        .collect();
     Ok(Box::new(OrtNet { session, shape }))
 }

@@ -8,7 +8,13 @@ use super::roi::Roi;
 /// `width` x `height` image. With `last` (the centre of the person followed
 /// until now, normalised), the detection nearest to it wins if it lies within
 /// one crop side, so re-detection keeps to the same person.
-pub fn choose(dets: &[Detection], person: PersonChoice, last: Option<(f32, f32)>, width: u32, height: u32) -> Option<Roi> {
+pub fn choose(
+    dets: &[Detection],
+    person: PersonChoice,
+    last: Option<(f32, f32)>,
+    width: u32,
+    height: u32,
+) -> Option<Roi> {
     let rois: Vec<Roi> = dets
         .iter()
         .map(|d| Roi::from_alignment(d.keypoints[0], d.keypoints[1], width, height))
@@ -50,7 +56,11 @@ mod tests {
     #[test]
     fn each_choice() {
         // Best score first: a small person at the left, a big one right of centre, one far right.
-        let dets = [det(0.9, 0.1, 0.5, 0.05), det(0.8, 0.6, 0.5, 0.2), det(0.7, 0.9, 0.5, 0.1)];
+        let dets = [
+            det(0.9, 0.1, 0.5, 0.05),
+            det(0.8, 0.6, 0.5, 0.2),
+            det(0.7, 0.9, 0.5, 0.1),
+        ];
         let pick = |p| choose(&dets, p, None, 100, 100).unwrap().cx;
         assert!((pick(PersonChoice::MostConfident) - 0.1).abs() < 1e-6);
         assert!((pick(PersonChoice::Leftmost) - 0.1).abs() < 1e-6);
@@ -66,7 +76,14 @@ mod tests {
         let r = choose(&dets, PersonChoice::Largest, Some((0.1, 0.5)), 100, 100).unwrap();
         assert!((r.cx - 0.12).abs() < 1e-6);
         // Nobody near the old position: back to the configured choice.
-        let r = choose(&dets[..1], PersonChoice::Leftmost, Some((0.1, 0.9)), 100, 100).unwrap();
+        let r = choose(
+            &dets[..1],
+            PersonChoice::Leftmost,
+            Some((0.1, 0.9)),
+            100,
+            100,
+        )
+        .unwrap();
         assert!((r.cx - 0.6).abs() < 1e-6);
     }
 }

@@ -118,6 +118,10 @@ mod tests {
             rotation: 0.5,
         };
         assert_eq!(crop(&img, rect, 8, Border::Zero)[0], 0);
-        assert!(crop(&img, rect, 8, Border::Replicate).iter().all(|&v| v == 100));
+        assert!(
+            crop(&img, rect, 8, Border::Replicate)
+                .iter()
+                .all(|&v| v == 100)
+        );
     }
 }

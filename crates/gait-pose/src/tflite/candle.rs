@@ -6,7 +6,7 @@ use candle_core::{Device, Tensor};
 
 use super::depthwise::Depthwise;
 use super::model::{Activation, Graph, Op, OpOptions};
-use super::same;
+use super::same::{self, nchw_axis};
 
 type R<T> = Result<T, String>;
 
@@ -14,12 +14,18 @@ fn ce(e: candle_core::Error) -> String {
     e.to_string()
 }
 
-/// NHWC axis -> NCHW axis for 4-D tensors.
-const NHWC_TO_NCHW: [usize; 4] = [0, 2, 3, 1];
-
 enum Step {
-    Conv1x1 { w: Tensor, b: Tensor },
-    Conv { w: Tensor, b: Tensor, stride: usize, dilation: usize, pads: [usize; 4] },
+    Conv1x1 {
+        w: Tensor,
+        b: Tensor,
+    },
+    Conv {
+        w: Tensor,
+        b: Tensor,
+        stride: usize,
+        dilation: usize,
+        pads: [usize; 4],
+    },
     Depthwise(Depthwise),
     Add,
     Mul,
@@ -27,8 +33,15 @@ enum Step {
     Pad(Vec<(usize, usize)>),
     Reshape(Vec<usize>),
     Concat(usize),
-    MaxPool { k: (usize, usize), stride: (usize, usize), pads: [usize; 4] },
-    Resize { ry: Tensor, rxt: Tensor },
+    MaxPool {
+        k: (usize, usize),
+        stride: (usize, usize),
+        pads: [usize; 4],
+    },
+    Resize {
+        ry: Tensor,
+        rxt: Tensor,
+    },
     DepthToSpace(usize),
     Logistic,
     Relu,
@@ -60,7 +73,11 @@ fn resize_matrix(input: usize, output: usize, align: bool, half: bool) -> Vec<f3
     };
     let mut m = vec![0f32; output * input];
     for o in 0..output {
-        let s = if half { (o as f32 + 0.5) * scale - 0.5 } else { o as f32 * scale };
+        let s = if half {
+            (o as f32 + 0.5) * scale - 0.5
+        } else {
+            o as f32 * scale
+        };
         let lo = (s.floor().max(0.0) as usize).min(input - 1);
         let hi = (s.ceil().max(0.0) as usize).min(input - 1);
         let f = s - lo as f32;
@@ -80,23 +97,49 @@ impl CandleGraph {
         let shape = |i: usize| graph.tensors[i].shape.clone();
         let mut nodes = Vec::new();
         for (k, op) in graph.operators.iter().enumerate() {
-            let ins: Vec<usize> = op.inputs.iter().filter(|&&i| i >= 0).map(|&i| i as usize).collect();
-            let out = *op.outputs.first().ok_or(format!("operator {k} has no output"))? as usize;
+            let ins: Vec<usize> = op
+                .inputs
+                .iter()
+                .filter(|&&i| i >= 0)
+                .map(|&i| i as usize)
+                .collect();
+            let out = *op
+                .outputs
+                .first()
+                .ok_or(format!("operator {k} has no output"))? as usize;
             let konst = |i: usize| -> R<Vec<f32>> {
-                values[i].clone().ok_or(format!("operator {k} ({:?}): input {} is not constant", op.op, graph.tensors[i].name))
+                values[i].clone().ok_or(format!(
+                    "operator {k} ({:?}): input {} is not constant",
+                    op.op, graph.tensors[i].name
+                ))
             };
-            let input = |j: usize| -> R<usize> { ins.get(j).copied().ok_or(format!("operator {k}: missing input {j}")) };
+            let input = |j: usize| -> R<usize> {
+                ins.get(j)
+                    .copied()
+                    .ok_or(format!("operator {k}: missing input {j}"))
+            };
             let mut act = Activation::None;
             let step = match (&op.op, &op.options) {
                 (Op::Dequantize | Op::Densify, _) => {
                     values[out] = Some(konst(input(0)?)?);
                     continue;
                 }
-                (Op::Conv2d, OpOptions::Conv { padding, stride, dilation, activation }) => {
+                (
+                    Op::Conv2d,
+                    OpOptions::Conv {
+                        padding,
+                        stride,
+                        dilation,
+                        activation,
+                    },
+                ) => {
                     act = *activation;
                     let (xs, ws) = (shape(input(0)?), shape(input(1)?));
-                    let [o, kh, kw, i] = ws[..] else { return Err(format!("operator {k}: conv weights {ws:?}")) };
-                    let w = Tensor::from_vec(konst(input(1)?)?, (o, kh, kw, i), &dev).map_err(ce)?;
+                    let [o, kh, kw, i] = ws[..] else {
+                        return Err(format!("operator {k}: conv weights {ws:?}"));
+                    };
+                    let w =
+                        Tensor::from_vec(konst(input(1)?)?, (o, kh, kw, i), &dev).map_err(ce)?;
                     let b = match ins.get(2) {
                         Some(&bi) => konst(bi)?,
                         None => vec![0.0; o],
@@ -112,17 +155,39 @@ impl CandleGraph {
                         let (_, pt) = same::axis(xs[1], kh, stride.0, dilation.0, *padding);
                         let (_, pl) = same::axis(xs[2], kw, stride.1, dilation.1, *padding);
                         let os = shape(out);
-                        let pb = ((os[1] - 1) * stride.0 + (kh - 1) * dilation.0 + 1).saturating_sub(xs[1] + pt);
-                        let pr = ((os[2] - 1) * stride.1 + (kw - 1) * dilation.1 + 1).saturating_sub(xs[2] + pl);
-                        let w = w.permute((0, 3, 1, 2)).and_then(|t| t.contiguous()).map_err(ce)?;
+                        let pb = ((os[1] - 1) * stride.0 + (kh - 1) * dilation.0 + 1)
+                            .saturating_sub(xs[1] + pt);
+                        let pr = ((os[2] - 1) * stride.1 + (kw - 1) * dilation.1 + 1)
+                            .saturating_sub(xs[2] + pl);
+                        let w = w
+                            .permute((0, 3, 1, 2))
+                            .and_then(|t| t.contiguous())
+                            .map_err(ce)?;
                         let b = Tensor::from_vec(b, (1, o, 1, 1), &dev).map_err(ce)?;
-                        Step::Conv { w, b, stride: stride.0, dilation: dilation.0, pads: [pt, pb, pl, pr] }
+                        Step::Conv {
+                            w,
+                            b,
+                            stride: stride.0,
+                            dilation: dilation.0,
+                            pads: [pt, pb, pl, pr],
+                        }
                     }
                 }
-                (Op::DepthwiseConv2d, OpOptions::Depthwise { padding, stride, dilation, multiplier, activation }) => {
+                (
+                    Op::DepthwiseConv2d,
+                    OpOptions::Depthwise {
+                        padding,
+                        stride,
+                        dilation,
+                        multiplier,
+                        activation,
+                    },
+                ) => {
                     act = *activation;
                     let (xs, ws) = (shape(input(0)?), shape(input(1)?));
-                    let [1, kh, kw, oc] = ws[..] else { return Err(format!("operator {k}: depthwise weights {ws:?}")) };
+                    let [1, kh, kw, oc] = ws[..] else {
+                        return Err(format!("operator {k}: depthwise weights {ws:?}"));
+                    };
                     let hwc = konst(input(1)?)?;
                     let mut weights = vec![0f32; oc * kh * kw];
                     for (j, v) in hwc.iter().enumerate() {
@@ -154,12 +219,17 @@ impl CandleGraph {
                     Step::Mul
                 }
                 (Op::Pad, _) => {
-                    let p = graph.tensors[input(1)?].i32s().ok_or(format!("operator {k}: paddings not constant"))?;
+                    let p = graph.tensors[input(1)?]
+                        .i32s()
+                        .ok_or(format!("operator {k}: paddings not constant"))?;
                     let r = rank[input(0)?];
                     let mut pads = vec![(0, 0); r];
                     for d in 0..r {
-                        let to = if r == 4 { NHWC_TO_NCHW[d] } else { d };
-                        let (a, b) = (p.get(2 * d).copied().unwrap_or(0), p.get(2 * d + 1).copied().unwrap_or(0));
+                        let to = nchw_axis(d, r);
+                        let (a, b) = (
+                            p.get(2 * d).copied().unwrap_or(0),
+                            p.get(2 * d + 1).copied().unwrap_or(0),
+                        );
                         pads[to] = (a.max(0) as usize, b.max(0) as usize);
                     }
                     Step::Pad(pads)
@@ -169,18 +239,36 @@ impl CandleGraph {
                     act = *activation;
                     let r = rank[out] as i32;
                     let a = if *axis < 0 { axis + r } else { *axis } as usize;
-                    Step::Concat(if r == 4 { NHWC_TO_NCHW[a] } else { a })
+                    Step::Concat(nchw_axis(a, r as usize))
                 }
-                (Op::MaxPool2d, OpOptions::Pool { padding, stride, filter, activation }) => {
+                (
+                    Op::MaxPool2d,
+                    OpOptions::Pool {
+                        padding,
+                        stride,
+                        filter,
+                        activation,
+                    },
+                ) => {
                     act = *activation;
                     let (xs, os) = (shape(input(0)?), shape(out));
                     let (_, pt) = same::axis(xs[1], filter.0, stride.0, 1, *padding);
                     let (_, pl) = same::axis(xs[2], filter.1, stride.1, 1, *padding);
                     let pb = ((os[1] - 1) * stride.0 + filter.0).saturating_sub(xs[1] + pt);
                     let pr = ((os[2] - 1) * stride.1 + filter.1).saturating_sub(xs[2] + pl);
-                    Step::MaxPool { k: *filter, stride: *stride, pads: [pt, pb, pl, pr] }
+                    Step::MaxPool {
+                        k: *filter,
+                        stride: *stride,
+                        pads: [pt, pb, pl, pr],
+                    }
                 }
-                (Op::ResizeBilinear, OpOptions::Resize { align_corners, half_pixel_centers }) => {
+                (
+                    Op::ResizeBilinear,
+                    OpOptions::Resize {
+                        align_corners,
+                        half_pixel_centers,
+                    },
+                ) => {
                     let (xs, os) = (shape(input(0)?), shape(out));
                     let ry = resize_matrix(xs[1], os[1], *align_corners, *half_pixel_centers);
                     let rx = resize_matrix(xs[2], os[2], *align_corners, *half_pixel_centers);
@@ -197,14 +285,23 @@ impl CandleGraph {
                 (Op::Relu6, _) => Step::Relu6,
                 (other, _) => return Err(format!("operator {k}: {other:?} is not supported")),
             };
-            nodes.push(Node { step, inputs: ins, output: out, act });
+            nodes.push(Node {
+                step,
+                inputs: ins,
+                output: out,
+                act,
+            });
         }
         let mut consts = vec![None; n];
         for (i, v) in values.into_iter().enumerate() {
             if let Some(v) = v {
                 let s = &graph.tensors[i].shape;
                 let t = Tensor::from_vec(v, s.clone(), &dev).map_err(ce)?;
-                consts[i] = Some(if s.len() == 4 { t.permute((0, 3, 1, 2)).map_err(ce)? } else { t });
+                consts[i] = Some(if s.len() == 4 {
+                    t.permute((0, 3, 1, 2)).map_err(ce)?
+                } else {
+                    t
+                });
             }
         }
         let input = *graph.inputs.first().ok_or("graph has no input")?;
@@ -223,7 +320,11 @@ impl CandleGraph {
     pub fn run(&self, input: &[f32]) -> R<Vec<Vec<f32>>> {
         let mut vals: Vec<Option<Tensor>> = self.consts.clone();
         let x = Tensor::from_slice(input, self.input_shape.clone(), &Device::Cpu).map_err(ce)?;
-        vals[self.input] = Some(x.permute((0, 3, 1, 2)).and_then(|t| t.contiguous()).map_err(ce)?);
+        vals[self.input] = Some(
+            x.permute((0, 3, 1, 2))
+                .and_then(|t| t.contiguous())
+                .map_err(ce)?,
+        );
         for (k, node) in self.nodes.iter().enumerate() {
             let get = |j: usize| -> R<&Tensor> {
                 node.inputs
@@ -231,7 +332,9 @@ impl CandleGraph {
                     .and_then(|&i| vals[i].as_ref())
                     .ok_or(format!("node {k}: input {j} not computed"))
             };
-            let y = self.step(node, &get, k).map_err(|e| format!("node {k}: {e}"))?;
+            let y = self
+                .step(node, &get, k)
+                .map_err(|e| format!("node {k}: {e}"))?;
             let y = match node.act {
                 Activation::None => y,
                 Activation::Relu => y.relu().map_err(ce)?,
@@ -245,7 +348,11 @@ impl CandleGraph {
             .iter()
             .map(|&o| {
                 let t = vals[o].as_ref().ok_or("output not computed")?;
-                let t = if self.rank[o] == 4 { t.permute((0, 2, 3, 1)).map_err(ce)? } else { t.clone() };
+                let t = if self.rank[o] == 4 {
+                    t.permute((0, 2, 3, 1)).map_err(ce)?
+                } else {
+                    t.clone()
+                };
                 t.flatten_all().and_then(|t| t.to_vec1::<f32>()).map_err(ce)
             })
             .collect()
@@ -260,7 +367,13 @@ impl CandleGraph {
                 let o = w.dim(0).map_err(ce)?;
                 y.broadcast_add(b).and_then(|y| y.reshape((1, o, h, wd)))
             }
-            Step::Conv { w, b, stride, dilation, pads } => x
+            Step::Conv {
+                w,
+                b,
+                stride,
+                dilation,
+                pads,
+            } => x
                 .pad_with_zeros(2, pads[0], pads[1])
                 .and_then(|x| x.pad_with_zeros(3, pads[2], pads[3]))
                 .and_then(|x| x.conv2d(w, 0, *stride, *dilation, 1))
@@ -278,9 +391,19 @@ impl CandleGraph {
                 Ok(y)
             }
             Step::Reshape(shape) => {
-                let src = if x.rank() == 4 { x.permute((0, 2, 3, 1)).and_then(|t| t.contiguous()).map_err(ce)? } else { x.clone() };
+                let src = if x.rank() == 4 {
+                    x.permute((0, 2, 3, 1))
+                        .and_then(|t| t.contiguous())
+                        .map_err(ce)?
+                } else {
+                    x.clone()
+                };
                 let y = src.reshape(shape.clone()).map_err(ce)?;
-                if shape.len() == 4 { y.permute((0, 3, 1, 2)) } else { Ok(y) }
+                if shape.len() == 4 {
+                    y.permute((0, 3, 1, 2))
+                } else {
+                    Ok(y)
+                }
             }
             Step::Concat(axis) => {
                 let xs: Vec<&Tensor> = (0..node.inputs.len()).map(get).collect::<R<_>>()?;
@@ -290,7 +413,9 @@ impl CandleGraph {
                 .pad_with_same(2, pads[0], pads[1])
                 .and_then(|x| x.pad_with_same(3, pads[2], pads[3]))
                 .and_then(|x| x.max_pool2d_with_stride(*k, *stride)),
-            Step::Resize { ry, rxt } => x.broadcast_matmul(rxt).and_then(|y| ry.broadcast_matmul(&y)),
+            Step::Resize { ry, rxt } => x
+                .broadcast_matmul(rxt)
+                .and_then(|y| ry.broadcast_matmul(&y)),
             Step::DepthToSpace(b) => {
                 let (n, c, h, w) = x.dims4().map_err(ce)?;
                 let co = c / (b * b);
@@ -298,7 +423,11 @@ impl CandleGraph {
                     .and_then(|t| t.permute((0, 3, 4, 1, 5, 2)))
                     .and_then(|t| t.reshape((n, co, h * b, w * b)))
             }
-            Step::Logistic => x.neg().and_then(|t| t.exp()).and_then(|t| t + 1.0).and_then(|t| t.recip()),
+            Step::Logistic => x
+                .neg()
+                .and_then(|t| t.exp())
+                .and_then(|t| t + 1.0)
+                .and_then(|t| t.recip()),
             Step::Relu => x.relu(),
             Step::Relu6 => x.clamp(0f32, 6f32),
         };

@@ -27,14 +27,21 @@ pub struct Sparsity {
 impl Sparsity {
     /// Scatters `values` (stored elements in traversal order) into a dense
     /// row-major tensor of `shape`; each element is `elem` bytes wide.
-    pub fn densify(&self, shape: &[usize], values: &[u8], elem: usize) -> Result<Vec<u8>, TfliteError> {
+    pub fn densify(
+        &self,
+        shape: &[usize],
+        values: &[u8],
+        elem: usize,
+    ) -> Result<Vec<u8>, TfliteError> {
         let n = shape.len();
         let k = self.block_map.len();
         let bad = |m: &str| TfliteError::Malformed(format!("sparse tensor: {m}"));
         if self.traversal_order.len() != n + k || self.dim_metadata.len() != n + k {
             return Err(bad("traversal order / dim metadata length"));
         }
-        if self.traversal_order.iter().any(|&d| d >= n + k) || self.block_map.iter().any(|&d| d >= n) {
+        if self.traversal_order.iter().any(|&d| d >= n + k)
+            || self.block_map.iter().any(|&d| d >= n)
+        {
             return Err(bad("dimension index out of range"));
         }
         // Block sizes are the dense sizes of the block dims' levels.
@@ -163,7 +170,9 @@ mod tests {
                 DimMeta::Dense(2),
             ],
         };
-        let out = sp.densify(&[2, 4], &f32s(&[1.0, 2.0, 3.0, 4.0]), 4).unwrap();
+        let out = sp
+            .densify(&[2, 4], &f32s(&[1.0, 2.0, 3.0, 4.0]), 4)
+            .unwrap();
         assert_eq!(out, f32s(&[0.0, 0.0, 1.0, 2.0, 3.0, 4.0, 0.0, 0.0]));
     }
 

@@ -22,7 +22,11 @@ impl CustomOp1 for Depthwise {
         "tflite-depthwise-conv2d"
     }
 
-    fn cpu_fwd(&self, storage: &CpuStorage, layout: &Layout) -> candle_core::Result<(CpuStorage, Shape)> {
+    fn cpu_fwd(
+        &self,
+        storage: &CpuStorage,
+        layout: &Layout,
+    ) -> candle_core::Result<(CpuStorage, Shape)> {
         let CpuStorage::F32(data) = storage else {
             bail!("depthwise conv: f32 input expected")
         };
@@ -31,13 +35,19 @@ impl CustomOp1 for Depthwise {
         };
         let x = &data[a..b];
         let &[n, c, h, w] = layout.dims() else {
-            bail!("depthwise conv: NCHW input expected, got {:?}", layout.dims())
+            bail!(
+                "depthwise conv: NCHW input expected, got {:?}",
+                layout.dims()
+            )
         };
         let (kh, kw) = self.kernel;
         let (oh, ow) = self.out_size;
         let oc = c * self.multiplier;
         if self.weights.len() != oc * kh * kw || self.bias.len() != oc || n != 1 {
-            bail!("depthwise conv: weights do not fit input {:?}", layout.dims())
+            bail!(
+                "depthwise conv: weights do not fit input {:?}",
+                layout.dims()
+            )
         }
         let (sy, sx) = self.stride;
         let (dy, dx) = self.dilation;
@@ -52,7 +62,11 @@ impl CustomOp1 for Depthwise {
                     let wv = self.weights[(o * kh + ky) * kw + kx];
                     let off_x = (kx * dx) as isize - px;
                     // Output columns whose input column lies inside the image.
-                    let lo = if off_x < 0 { ((-off_x) as usize).div_ceil(sx) } else { 0 };
+                    let lo = if off_x < 0 {
+                        ((-off_x) as usize).div_ceil(sx)
+                    } else {
+                        0
+                    };
                     let hi = if (w as isize) > off_x {
                         ((w as isize - off_x - 1) as usize / sx + 1).min(ow)
                     } else {

@@ -5,14 +5,14 @@
 mod candle;
 mod densify;
 mod depthwise;
-mod same;
 mod flatbuf;
 mod model;
 mod onnx;
+mod same;
 
 pub use candle::CandleGraph;
-pub use onnx::to_onnx;
 pub use model::{Activation, DType, Graph, Op, OpOptions, Operator, Padding, Tensor};
+pub use onnx::to_onnx;
 
 /// Why a `.tflite` file cannot be read.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -195,7 +195,11 @@ pub struct Graph {
 }
 
 fn padding(c: u8) -> Padding {
-    if c == 1 { Padding::Valid } else { Padding::Same }
+    if c == 1 {
+        Padding::Valid
+    } else {
+        Padding::Same
+    }
 }
 
 fn activation(c: u8) -> R<Activation> {
@@ -284,24 +288,41 @@ fn index_vector(t: Option<Table>, kind: u8) -> R<Vec<usize>> {
         1 => t
             .i32s(0)?
             .into_iter()
-            .map(|v| usize::try_from(v).map_err(|_| TfliteError::Malformed("negative sparse index".into())))
+            .map(|v| {
+                usize::try_from(v)
+                    .map_err(|_| TfliteError::Malformed("negative sparse index".into()))
+            })
             .collect::<R<_>>()?,
         2 => t.u16s(0)?.into_iter().map(usize::from).collect(),
-        3 => t.bytes(0)?.unwrap_or_default().iter().map(|&b| b as usize).collect(),
-        o => return Err(TfliteError::Unsupported(format!("sparse index vector type {o}"))),
+        3 => t
+            .bytes(0)?
+            .unwrap_or_default()
+            .iter()
+            .map(|&b| b as usize)
+            .collect(),
+        o => {
+            return Err(TfliteError::Unsupported(format!(
+                "sparse index vector type {o}"
+            )));
+        }
     })
 }
 
 fn sparsity(t: Table) -> R<Sparsity> {
     let dims = |v: Vec<i32>| -> R<Vec<usize>> {
         v.into_iter()
-            .map(|d| usize::try_from(d).map_err(|_| TfliteError::Malformed("negative sparse dim".into())))
+            .map(|d| {
+                usize::try_from(d).map_err(|_| TfliteError::Malformed("negative sparse dim".into()))
+            })
             .collect()
     };
     let mut dim_metadata = Vec::new();
     for m in t.tables(2)? {
         dim_metadata.push(if m.u8_or(0, 0)? == 0 {
-            DimMeta::Dense(usize::try_from(m.i32_or(1, 0)?).map_err(|_| TfliteError::Malformed("dense_size".into()))?)
+            DimMeta::Dense(
+                usize::try_from(m.i32_or(1, 0)?)
+                    .map_err(|_| TfliteError::Malformed("dense_size".into()))?,
+            )
         } else {
             DimMeta::SparseCsr {
                 segments: index_vector(m.table(3)?, m.u8_or(2, 0)?)?,
@@ -320,10 +341,15 @@ impl Graph {
     /// Parses a `.tflite` file's bytes.
     pub fn parse(bytes: &[u8]) -> R<Self> {
         if bytes.len() < 8 {
-            return Err(TfliteError::Malformed(format!("only {} bytes", bytes.len())));
+            return Err(TfliteError::Malformed(format!(
+                "only {} bytes",
+                bytes.len()
+            )));
         }
         if &bytes[4..8] != b"TFL3" {
-            return Err(TfliteError::Foreign(String::from_utf8_lossy(&bytes[4..8]).into_owned()));
+            return Err(TfliteError::Foreign(
+                String::from_utf8_lossy(&bytes[4..8]).into_owned(),
+            ));
         }
         let buf = Buf(bytes);
         let model = buf.root()?;
@@ -347,7 +373,10 @@ impl Graph {
             let shape = t
                 .i32s(0)?
                 .into_iter()
-                .map(|d| usize::try_from(d).map_err(|_| TfliteError::Unsupported(format!("dynamic dimension {d}"))))
+                .map(|d| {
+                    usize::try_from(d)
+                        .map_err(|_| TfliteError::Unsupported(format!("dynamic dimension {d}")))
+                })
                 .collect::<R<Vec<_>>>()?;
             let dtype = DType::from_code(t.u8_or(1, 0)?);
             let name = t.string(3)?;
@@ -357,9 +386,9 @@ impl Graph {
                 _ => None,
             };
             if let (Some(sp), Some(raw)) = (t.table(6)?, data.as_ref()) {
-                let elem = dtype
-                    .size()
-                    .ok_or_else(|| TfliteError::Unsupported(format!("sparse tensor {name} of type {dtype:?}")))?;
+                let elem = dtype.size().ok_or_else(|| {
+                    TfliteError::Unsupported(format!("sparse tensor {name} of type {dtype:?}"))
+                })?;
                 data = Some(sparsity(sp)?.densify(&shape, raw, elem)?);
             }
             if let (Some(d), Some(elem)) = (data.as_ref(), dtype.size()) {
@@ -371,7 +400,12 @@ impl Graph {
                     )));
                 }
             }
-            tensors.push(Tensor { name, shape, dtype, data });
+            tensors.push(Tensor {
+                name,
+                shape,
+                dtype,
+                data,
+            });
         }
 
         let idx = |v: Vec<i32>, what: &str| -> R<Vec<usize>> {
@@ -416,7 +450,8 @@ impl Graph {
 
     /// Reads and parses a `.tflite` file.
     pub fn load(path: &std::path::Path) -> R<Self> {
-        let bytes = std::fs::read(path).map_err(|e| TfliteError::Malformed(format!("cannot read: {e}")))?;
+        let bytes =
+            std::fs::read(path).map_err(|e| TfliteError::Malformed(format!("cannot read: {e}")))?;
         Self::parse(&bytes)
     }
 }

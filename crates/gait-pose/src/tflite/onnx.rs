@@ -3,7 +3,7 @@
 //! outputs are given back NHWC, like the TFLite model.
 
 use super::model::{Activation, Graph, Op, OpOptions};
-use super::same;
+use super::same::{self, nchw_axis};
 
 /// Protobuf writer: fields are appended as (tag, payload).
 #[derive(Default)]
@@ -68,11 +68,21 @@ fn tensor(name: &str, dims: &[usize], data_type: i64, raw: Vec<u8>) -> Pb {
 }
 
 fn f32_tensor(name: &str, dims: &[usize], v: &[f32]) -> Pb {
-    tensor(name, dims, 1, v.iter().flat_map(|x| x.to_le_bytes()).collect())
+    tensor(
+        name,
+        dims,
+        1,
+        v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+    )
 }
 
 fn i64_tensor(name: &str, v: &[i64]) -> Pb {
-    tensor(name, &[v.len()], 7, v.iter().flat_map(|x| x.to_le_bytes()).collect())
+    tensor(
+        name,
+        &[v.len()],
+        7,
+        v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+    )
 }
 
 fn value_info(name: &str, dims: &[usize]) -> Pb {
@@ -102,7 +112,9 @@ impl Builder {
         for i in inputs {
             n.str(1, i);
         }
-        n.str(2, output).str(3, &format!("n{}", self.count)).str(4, op);
+        n.str(2, output)
+            .str(3, &format!("n{}", self.count))
+            .str(4, op);
         for (name, a) in attrs {
             n.msg(5, attr(name, a));
         }
@@ -121,7 +133,11 @@ impl Builder {
             Activation::None => self.node("Identity", &[x], out, vec![]),
             Activation::Relu => self.node("Relu", &[x], out, vec![]),
             Activation::Relu6 | Activation::ReluN1To1 => {
-                let (lo, hi) = if act == Activation::Relu6 { (0.0, 6.0) } else { (-1.0, 1.0) };
+                let (lo, hi) = if act == Activation::Relu6 {
+                    (0.0, 6.0)
+                } else {
+                    (-1.0, 1.0)
+                };
                 let (a, b) = (self.fresh("lo"), self.fresh("hi"));
                 self.init(f32_tensor(&a, &[], &[lo]));
                 self.init(f32_tensor(&b, &[], &[hi]));
@@ -132,8 +148,6 @@ impl Builder {
         Ok(())
     }
 }
-
-const NHWC_TO_NCHW: [usize; 4] = [0, 2, 3, 1];
 
 /// The ONNX model bytes of `graph`.
 pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
@@ -147,12 +161,33 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
     let mut konst: Vec<Option<Vec<f32>>> = t.iter().map(|t| t.f32s()).collect();
     let input = *graph.inputs.first().ok_or("graph has no input")?;
     b.graph.msg(11, value_info("input", &t[input].shape));
-    b.node("Transpose", &["input"], &name(input), vec![("perm", Attr::Ints(vec![0, 3, 1, 2]))]);
+    b.node(
+        "Transpose",
+        &["input"],
+        &name(input),
+        vec![("perm", Attr::Ints(vec![0, 3, 1, 2]))],
+    );
     for (k, op) in graph.operators.iter().enumerate() {
-        let ins: Vec<usize> = op.inputs.iter().filter(|&&i| i >= 0).map(|&i| i as usize).collect();
-        let out = *op.outputs.first().ok_or(format!("operator {k} has no output"))? as usize;
-        let get = |j: usize| ins.get(j).copied().ok_or(format!("operator {k}: missing input {j}"));
-        let cst = |i: usize| konst[i].clone().ok_or(format!("operator {k}: input {i} not constant"));
+        let ins: Vec<usize> = op
+            .inputs
+            .iter()
+            .filter(|&&i| i >= 0)
+            .map(|&i| i as usize)
+            .collect();
+        let out = *op
+            .outputs
+            .first()
+            .ok_or(format!("operator {k} has no output"))? as usize;
+        let get = |j: usize| {
+            ins.get(j)
+                .copied()
+                .ok_or(format!("operator {k}: missing input {j}"))
+        };
+        let cst = |i: usize| {
+            konst[i]
+                .clone()
+                .ok_or(format!("operator {k}: input {i} not constant"))
+        };
         let pre = b.fresh("pre");
         let (o, x) = (name(out), name(get(0)?));
         match (&op.op, &op.options) {
@@ -162,18 +197,36 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
             }
             (Op::Conv2d | Op::DepthwiseConv2d, opts) => {
                 let (padding, stride, dilation, act, depthwise) = match opts {
-                    OpOptions::Conv { padding, stride, dilation, activation } => (*padding, *stride, *dilation, *activation, false),
-                    OpOptions::Depthwise { padding, stride, dilation, activation, .. } => (*padding, *stride, *dilation, *activation, true),
+                    OpOptions::Conv {
+                        padding,
+                        stride,
+                        dilation,
+                        activation,
+                    } => (*padding, *stride, *dilation, *activation, false),
+                    OpOptions::Depthwise {
+                        padding,
+                        stride,
+                        dilation,
+                        activation,
+                        ..
+                    } => (*padding, *stride, *dilation, *activation, true),
                     _ => return Err(format!("operator {k}: conv options")),
                 };
                 let (xs, ws, os) = (&t[get(0)?].shape, &t[get(1)?].shape, &t[out].shape);
-                let [wo, kh, kw, wi] = ws[..] else { return Err(format!("operator {k}: weights {ws:?}")) };
+                let [wo, kh, kw, wi] = ws[..] else {
+                    return Err(format!("operator {k}: weights {ws:?}"));
+                };
                 let w = cst(get(1)?)?;
                 // TFLite OHWI (depthwise 1HWC) -> ONNX OIHW (depthwise C1HW).
                 let (oc, ic) = if depthwise { (wi, 1) } else { (wo, wi) };
                 let mut wt = vec![0f32; w.len()];
                 for (j, v) in w.iter().enumerate() {
-                    let (a, y, xx, c) = (j / (kh * kw * wi), (j / (kw * wi)) % kh, (j / wi) % kw, j % wi);
+                    let (a, y, xx, c) = (
+                        j / (kh * kw * wi),
+                        (j / (kw * wi)) % kh,
+                        (j / wi) % kw,
+                        j % wi,
+                    );
                     let (oo, ii) = if depthwise { (c, 0) } else { (a, c) };
                     wt[((oo * ic + ii) * kh + y) * kw + xx] = *v;
                 }
@@ -186,13 +239,24 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
                 b.init(f32_tensor(&bn, &[oc], &bias));
                 let (_, pt) = same::axis(xs[1], kh, stride.0, dilation.0, padding);
                 let (_, pl) = same::axis(xs[2], kw, stride.1, dilation.1, padding);
-                let pb = ((os[1] - 1) * stride.0 + (kh - 1) * dilation.0 + 1).saturating_sub(xs[1] + pt);
-                let pr = ((os[2] - 1) * stride.1 + (kw - 1) * dilation.1 + 1).saturating_sub(xs[2] + pl);
+                let pb =
+                    ((os[1] - 1) * stride.0 + (kh - 1) * dilation.0 + 1).saturating_sub(xs[1] + pt);
+                let pr =
+                    ((os[2] - 1) * stride.1 + (kw - 1) * dilation.1 + 1).saturating_sub(xs[2] + pl);
                 let mut attrs = vec![
                     ("kernel_shape", Attr::Ints(vec![kh as i64, kw as i64])),
-                    ("strides", Attr::Ints(vec![stride.0 as i64, stride.1 as i64])),
-                    ("dilations", Attr::Ints(vec![dilation.0 as i64, dilation.1 as i64])),
-                    ("pads", Attr::Ints(vec![pt as i64, pl as i64, pb as i64, pr as i64])),
+                    (
+                        "strides",
+                        Attr::Ints(vec![stride.0 as i64, stride.1 as i64]),
+                    ),
+                    (
+                        "dilations",
+                        Attr::Ints(vec![dilation.0 as i64, dilation.1 as i64]),
+                    ),
+                    (
+                        "pads",
+                        Attr::Ints(vec![pt as i64, pl as i64, pb as i64, pr as i64]),
+                    ),
                 ];
                 if depthwise {
                     attrs.push(("group", Attr::Int(xs[3] as i64)));
@@ -210,7 +274,11 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
                         return Err(format!("operator {k}: 4-D constant operand"));
                     }
                     // A per-channel vector broadcasts over NCHW as [C, 1, 1].
-                    let dims: Vec<usize> = if s.len() == 1 && t[out].shape.len() == 4 { vec![s[0], 1, 1] } else { s.clone() };
+                    let dims: Vec<usize> = if s.len() == 1 && t[out].shape.len() == 4 {
+                        vec![s[0], 1, 1]
+                    } else {
+                        s.clone()
+                    };
                     b.init(f32_tensor(&y, &dims, &v));
                 }
                 b.node(onnx_op, &[&x, &y], &pre, vec![]);
@@ -221,7 +289,7 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
                 let r = t[get(0)?].shape.len();
                 let mut pads = vec![0i64; 2 * r];
                 for d in 0..r {
-                    let to = if r == 4 { NHWC_TO_NCHW[d] } else { d };
+                    let to = nchw_axis(d, r);
                     pads[to] = p.get(2 * d).copied().unwrap_or(0) as i64;
                     pads[r + to] = p.get(2 * d + 1).copied().unwrap_or(0) as i64;
                 }
@@ -232,17 +300,30 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
             (Op::Reshape, _) => {
                 let src = if t[get(0)?].shape.len() == 4 {
                     let n = b.fresh("nhwc");
-                    b.node("Transpose", &[&x], &n, vec![("perm", Attr::Ints(vec![0, 2, 3, 1]))]);
+                    b.node(
+                        "Transpose",
+                        &[&x],
+                        &n,
+                        vec![("perm", Attr::Ints(vec![0, 2, 3, 1]))],
+                    );
                     n
                 } else {
                     x.clone()
                 };
                 let s = &t[out].shape;
                 let sn = b.fresh("shape");
-                b.init(i64_tensor(&sn, &s.iter().map(|&d| d as i64).collect::<Vec<_>>()));
+                b.init(i64_tensor(
+                    &sn,
+                    &s.iter().map(|&d| d as i64).collect::<Vec<_>>(),
+                ));
                 if s.len() == 4 {
                     b.node("Reshape", &[&src, &sn], &pre, vec![]);
-                    b.node("Transpose", &[&pre], &o, vec![("perm", Attr::Ints(vec![0, 3, 1, 2]))]);
+                    b.node(
+                        "Transpose",
+                        &[&pre],
+                        &o,
+                        vec![("perm", Attr::Ints(vec![0, 3, 1, 2]))],
+                    );
                 } else {
                     b.node("Reshape", &[&src, &sn], &o, vec![]);
                 }
@@ -250,40 +331,72 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
             (Op::Concatenation, OpOptions::Concat { axis, activation }) => {
                 let r = t[out].shape.len() as i32;
                 let a = if *axis < 0 { axis + r } else { *axis } as usize;
-                let a = if r == 4 { NHWC_TO_NCHW[a] } else { a };
+                let a = nchw_axis(a, r as usize);
                 let names: Vec<String> = ins.iter().map(|&i| name(i)).collect();
                 let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
                 b.node("Concat", &refs, &pre, vec![("axis", Attr::Int(a as i64))]);
                 b.activation(*activation, &pre, &o)?;
             }
-            (Op::MaxPool2d, OpOptions::Pool { padding, stride, filter, activation }) => {
+            (
+                Op::MaxPool2d,
+                OpOptions::Pool {
+                    padding,
+                    stride,
+                    filter,
+                    activation,
+                },
+            ) => {
                 let (xs, os) = (&t[get(0)?].shape, &t[out].shape);
                 let (_, pt) = same::axis(xs[1], filter.0, stride.0, 1, *padding);
                 let (_, pl) = same::axis(xs[2], filter.1, stride.1, 1, *padding);
                 let pb = ((os[1] - 1) * stride.0 + filter.0).saturating_sub(xs[1] + pt);
                 let pr = ((os[2] - 1) * stride.1 + filter.1).saturating_sub(xs[2] + pl);
                 let attrs = vec![
-                    ("kernel_shape", Attr::Ints(vec![filter.0 as i64, filter.1 as i64])),
-                    ("strides", Attr::Ints(vec![stride.0 as i64, stride.1 as i64])),
-                    ("pads", Attr::Ints(vec![pt as i64, pl as i64, pb as i64, pr as i64])),
+                    (
+                        "kernel_shape",
+                        Attr::Ints(vec![filter.0 as i64, filter.1 as i64]),
+                    ),
+                    (
+                        "strides",
+                        Attr::Ints(vec![stride.0 as i64, stride.1 as i64]),
+                    ),
+                    (
+                        "pads",
+                        Attr::Ints(vec![pt as i64, pl as i64, pb as i64, pr as i64]),
+                    ),
                 ];
                 b.node("MaxPool", &[&x], &pre, attrs);
                 b.activation(*activation, &pre, &o)?;
             }
-            (Op::ResizeBilinear, OpOptions::Resize { align_corners, half_pixel_centers }) => {
+            (
+                Op::ResizeBilinear,
+                OpOptions::Resize {
+                    align_corners,
+                    half_pixel_centers,
+                },
+            ) => {
                 let os = &t[out].shape;
                 let sn = b.fresh("sizes");
-                b.init(i64_tensor(&sn, &[os[0] as i64, os[3] as i64, os[1] as i64, os[2] as i64]));
+                b.init(i64_tensor(
+                    &sn,
+                    &[os[0] as i64, os[3] as i64, os[1] as i64, os[2] as i64],
+                ));
                 let mode = match (align_corners, half_pixel_centers) {
                     (true, _) => "align_corners",
                     (false, true) => "half_pixel",
                     (false, false) => "asymmetric",
                 };
-                let attrs = vec![("mode", Attr::Str("linear")), ("coordinate_transformation_mode", Attr::Str(mode))];
+                let attrs = vec![
+                    ("mode", Attr::Str("linear")),
+                    ("coordinate_transformation_mode", Attr::Str(mode)),
+                ];
                 b.node("Resize", &[&x, "", "", &sn], &o, attrs);
             }
             (Op::DepthToSpace, OpOptions::DepthToSpace { block }) => {
-                let attrs = vec![("blocksize", Attr::Int(*block as i64)), ("mode", Attr::Str("DCR"))];
+                let attrs = vec![
+                    ("blocksize", Attr::Int(*block as i64)),
+                    ("mode", Attr::Str("DCR")),
+                ];
                 b.node("DepthToSpace", &[&x], &o, attrs);
             }
             (Op::Logistic, _) => b.node("Sigmoid", &[&x], &o, vec![]),
@@ -295,8 +408,17 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
     for (j, &out) in graph.outputs.iter().enumerate() {
         let s = &t[out].shape;
         let on = format!("output{j}");
-        let perm = if s.len() == 4 { vec![0, 2, 3, 1] } else { (0..s.len() as i64).collect() };
-        b.node("Transpose", &[&name(out)], &on, vec![("perm", Attr::Ints(perm))]);
+        let perm = if s.len() == 4 {
+            vec![0, 2, 3, 1]
+        } else {
+            (0..s.len() as i64).collect()
+        };
+        b.node(
+            "Transpose",
+            &[&name(out)],
+            &on,
+            vec![("perm", Attr::Ints(perm))],
+        );
         b.graph.msg(12, value_info(&on, s));
     }
     let mut model = Pb::default();

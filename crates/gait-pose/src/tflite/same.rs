@@ -3,7 +3,13 @@
 use super::Padding;
 
 /// (output size, padding before) along one axis.
-pub(crate) fn axis(input: usize, kernel: usize, stride: usize, dilation: usize, padding: Padding) -> (usize, usize) {
+pub(crate) fn axis(
+    input: usize,
+    kernel: usize,
+    stride: usize,
+    dilation: usize,
+    padding: Padding,
+) -> (usize, usize) {
     let eff = (kernel - 1) * dilation + 1;
     match padding {
         Padding::Same => {
@@ -12,6 +18,17 @@ pub(crate) fn axis(input: usize, kernel: usize, stride: usize, dilation: usize, 
             (out, total / 2)
         }
         Padding::Valid => ((input + stride).saturating_sub(eff) / stride, 0),
+    }
+}
+
+/// The NCHW axis of TFLite's NHWC axis `axis` in a tensor of `rank` (only
+/// 4-D tensors are stored NCHW).
+pub(crate) fn nchw_axis(axis: usize, rank: usize) -> usize {
+    match (rank, axis) {
+        (4, 1) => 2,
+        (4, 2) => 3,
+        (4, 3) => 1,
+        _ => axis,
     }
 }
 
