@@ -3,6 +3,11 @@
 
 mod canny;
 mod canny_detector;
+mod hed;
+mod hed_candle;
+mod hed_fuse;
+mod hed_net;
+mod hed_ort;
 mod resample;
 mod working_size;
 
@@ -13,6 +18,8 @@ use serde::{Deserialize, Serialize};
 
 pub use canny::{Canny, CannyParams, edge_f1};
 pub use canny_detector::{CannyConfig, CannyDetector};
+pub use hed::{CandleHedNet, HedConfig, HedDetector, HedError, HedNetwork, OrtHedNet};
+pub use hed_fuse::{SideOutput, fuse};
 pub use resample::resize_for_annotator;
 pub use working_size::{DEFAULT_RESOLUTION, to_working_size, working_resize};
 
@@ -24,24 +31,28 @@ pub enum EdgeConfig {
     None,
     /// OpenCV-exact Canny, as ControlNet's canny annotator.
     Canny(CannyConfig),
+    /// ControlNet's HED soft-edge annotator on candle or ort.
+    Hed(HedConfig),
 }
 
 impl EdgeConfig {
     /// Builds the detector; `Ok(None)` for `kind = "none"`.
-    pub fn build(&self, _ctx: &StageContext) -> Result<Option<Box<dyn EdgeDetector>>, StageError> {
+    pub fn build(&self, ctx: &StageContext) -> Result<Option<Box<dyn EdgeDetector>>, StageError> {
         match self {
             EdgeConfig::None => Ok(None),
             EdgeConfig::Canny(c) => {
                 c.validate()?;
                 Ok(Some(Box::new(CannyDetector::new(c))))
             }
+            EdgeConfig::Hed(c) => Ok(Some(Box::new(c.build(ctx)?))),
         }
     }
 
     /// Model files the detector reads (checksummed into `run.json`).
-    pub fn model_files(&self, _ctx: &StageContext) -> Vec<PathBuf> {
+    pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
         match self {
             EdgeConfig::None | EdgeConfig::Canny(_) => Vec::new(),
+            EdgeConfig::Hed(c) => vec![c.weights_path(ctx)],
         }
     }
 }
