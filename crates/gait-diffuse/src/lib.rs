@@ -1,13 +1,35 @@
 //! Image regenerators implementing [`gait_core::ImageRegenerator`], chosen in
-//! the `[regenerator]` table of a pipeline config by `kind`.
+//! the `[regenerator]` table of a pipeline config by `kind`: `passthrough`
+//! (the paper's baseline) and `controlnet` (SD 1.5 + canny ControlNet on candle).
 
+mod clip_text;
+mod config;
+mod controlnet;
+mod error;
+pub mod model_config;
+mod noise;
 mod passthrough;
+mod pipeline;
+mod regenerator;
+mod schedule;
+mod tokenizer;
+mod warp;
+pub mod weights;
 
 use std::path::PathBuf;
 
+pub use clip_text::ClipTextModel;
+pub use config::{ControlnetConfig, Dtype, PAPER_NEGATIVE_PROMPT, PAPER_PROMPT};
+pub use controlnet::{ControlNet, ControlResiduals};
+pub use error::DiffuseError;
 use gait_core::{ImageRegenerator, StageContext, StageError};
+pub use noise::NoiseRng;
 pub use passthrough::Passthrough;
+pub use pipeline::{ControlnetPipeline, DenoiseParams};
+pub use regenerator::{ControlnetRegenerator, canvas_for};
+pub use schedule::{Scheduler, SchedulerKind};
 use serde::{Deserialize, Serialize};
+pub use tokenizer::{ClipTokenizer, MAX_LEN};
 
 /// The `[regenerator]` table. `kind` picks the regenerator.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -15,12 +37,15 @@ use serde::{Deserialize, Serialize};
 pub enum RegeneratorConfig {
     /// Original frames go to the pose model unchanged.
     Passthrough,
+    /// SD 1.5 + ControlNet redraws each frame from its edge map.
+    Controlnet(ControlnetConfig),
 }
 
 impl RegeneratorConfig {
-    pub fn build(&self, _ctx: &StageContext) -> Result<Box<dyn ImageRegenerator>, StageError> {
+    pub fn build(&self, ctx: &StageContext) -> Result<Box<dyn ImageRegenerator>, StageError> {
         match self {
             RegeneratorConfig::Passthrough => Ok(Box::new(Passthrough)),
+            RegeneratorConfig::Controlnet(c) => Ok(Box::new(ControlnetRegenerator::new(c, ctx)?)),
         }
     }
 
@@ -28,6 +53,7 @@ impl RegeneratorConfig {
     pub fn needs_edges(&self) -> bool {
         match self {
             RegeneratorConfig::Passthrough => false,
+            RegeneratorConfig::Controlnet(_) => true,
         }
     }
 
@@ -38,7 +64,69 @@ impl RegeneratorConfig {
     }
 
     /// Model files the regenerator reads (checksummed into `run.json`).
-    pub fn model_files(&self, _ctx: &StageContext) -> Vec<PathBuf> {
-        Vec::new()
+    pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
+        match self {
+            RegeneratorConfig::Passthrough => Vec::new(),
+            RegeneratorConfig::Controlnet(c) => weights::required_files(
+                &ctx.model_path(&c.sd_path),
+                &ctx.model_path(&c.controlnet_path),
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn controlnet_table_defaults_to_the_paper() {
+        let c: RegeneratorConfig = toml::from_str("kind = \"controlnet\"").unwrap();
+        let RegeneratorConfig::Controlnet(c) = c else {
+            panic!("wrong kind")
+        };
+        assert_eq!(c.prompt, PAPER_PROMPT);
+        assert_eq!(c.negative_prompt, PAPER_NEGATIVE_PROMPT);
+        assert_eq!(c.resolution, 512);
+    }
+
+    #[test]
+    fn every_knob_parses_and_unknown_keys_are_named() {
+        let c: RegeneratorConfig = toml::from_str(
+            "kind = \"controlnet\"\nbackend = \"candle\"\nsteps = 2\nguidance_scale = 5.0\n\
+             conditioning_scale = 0.5\nscheduler = \"ddim\"\nseed = 9\nshared_noise = true\n\
+             dtype = \"bf16\"\nbatch = 4\nresolution = 256\nprompt = \"a\"\nnegative_prompt = \"b\"\n\
+             sd_path = \"x\"\ncontrolnet_path = \"y\"",
+        )
+        .unwrap();
+        let RegeneratorConfig::Controlnet(c) = c else {
+            panic!("wrong kind")
+        };
+        assert_eq!((c.steps, c.batch, c.seed), (2, 4, 9));
+        assert_eq!(c.scheduler, SchedulerKind::Ddim);
+        assert_eq!(c.dtype, Dtype::Bf16);
+        let err = toml::from_str::<RegeneratorConfig>("kind = \"controlnet\"\nstep = 3")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("step") && err.contains("steps"), "{err}");
+    }
+
+    #[test]
+    fn missing_weights_list_every_file() {
+        let dir = std::env::temp_dir().join("gait-diffuse-no-models");
+        let ctx = StageContext::new(&dir);
+        let cfg: RegeneratorConfig = toml::from_str("kind = \"controlnet\"").unwrap();
+        assert_eq!(cfg.model_files(&ctx).len(), 5);
+        let Err(err) = cfg.build(&ctx) else {
+            panic!("built without weights")
+        };
+        let msg = err.to_string();
+        for f in [
+            "unet/diffusion_pytorch_model.safetensors",
+            "text_encoder/model.safetensors",
+            "sd-controlnet-canny",
+        ] {
+            assert!(msg.contains(f), "{msg}");
+        }
     }
 }

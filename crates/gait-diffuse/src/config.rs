@@ -1,0 +1,106 @@
+//! The `[regenerator]` table for `kind = "controlnet"`.
+
+use std::path::PathBuf;
+
+use gait_core::Backend;
+use serde::{Deserialize, Serialize};
+
+use crate::schedule::SchedulerKind;
+
+/// The paper's prompt for regenerating the person with intact limbs.
+pub const PAPER_PROMPT: &str =
+    "an able-body person walking, intact lower limbs, 2 legs, full-body portrait, realistic";
+/// The paper's negative prompt.
+pub const PAPER_NEGATIVE_PROMPT: &str = "cyborg, amputee, panfuturism";
+
+/// Floating-point type the models run in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Dtype {
+    #[default]
+    F32,
+    F16,
+    Bf16,
+}
+
+impl Dtype {
+    pub fn candle(self) -> candle_core::DType {
+        match self {
+            Dtype::F32 => candle_core::DType::F32,
+            Dtype::F16 => candle_core::DType::F16,
+            Dtype::Bf16 => candle_core::DType::BF16,
+        }
+    }
+}
+
+/// SD 1.5 + canny ControlNet regeneration settings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ControlnetConfig {
+    pub backend: Backend,
+    /// SD 1.5 folder in diffusers layout (unet/, vae/, text_encoder/,
+    /// tokenizer/), relative to the models folder.
+    pub sd_path: PathBuf,
+    /// ControlNet folder in diffusers layout, relative to the models folder.
+    pub controlnet_path: PathBuf,
+    pub prompt: String,
+    pub negative_prompt: String,
+    pub steps: usize,
+    pub guidance_scale: f64,
+    /// Weight of the ControlNet residuals (diffusers' `controlnet_conditioning_scale`).
+    pub conditioning_scale: f64,
+    pub scheduler: SchedulerKind,
+    /// Base seed; frame i uses `seed + i` unless `shared_noise` is set.
+    pub seed: u64,
+    /// Same initial noise for every frame (steadier video).
+    pub shared_noise: bool,
+    pub dtype: Dtype,
+    /// Frames denoised together.
+    pub batch: usize,
+    /// Short side of the generation canvas (a multiple of 64; long side
+    /// follows the frame's aspect, rounded to 64, as ControlNet's annotators do).
+    pub resolution: u32,
+}
+
+impl Default for ControlnetConfig {
+    fn default() -> Self {
+        Self {
+            backend: Backend::Candle,
+            sd_path: "stable-diffusion-v1-5".into(),
+            controlnet_path: "sd-controlnet-canny".into(),
+            prompt: PAPER_PROMPT.into(),
+            negative_prompt: PAPER_NEGATIVE_PROMPT.into(),
+            steps: 20,
+            guidance_scale: 7.5,
+            conditioning_scale: 1.0,
+            scheduler: SchedulerKind::Unipc,
+            seed: 0,
+            shared_noise: false,
+            dtype: Dtype::F32,
+            batch: 1,
+            resolution: 512,
+        }
+    }
+}
+
+impl ControlnetConfig {
+    /// Checks value ranges that serde cannot.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.steps == 0 || self.steps > 1000 {
+            return Err(format!(
+                "regenerator.steps = {} must be in 1..=1000",
+                self.steps
+            ));
+        }
+        if self.batch == 0 {
+            return Err("regenerator.batch must be at least 1".into());
+        }
+        if self.resolution < 64 || !self.resolution.is_multiple_of(64) {
+            return Err(format!(
+                "regenerator.resolution = {} must be a positive multiple of 64",
+                self.resolution
+            ));
+        }
+        Ok(())
+    }
+}

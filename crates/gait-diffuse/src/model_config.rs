@@ -1,0 +1,224 @@
+//! The subset of diffusers' / transformers' `config.json` files our models read.
+//! Defaults are Stable Diffusion 1.5's values (runwayml/stable-diffusion-v1-5
+//! `unet/config.json`, `vae/config.json`, `text_encoder/config.json`, and
+//! lllyasviel/sd-controlnet-canny `config.json`), used when a folder has no config.
+
+use std::path::Path;
+
+use candle_transformers::models::stable_diffusion::{unet_2d, vae};
+use serde::Deserialize;
+
+use crate::DiffuseError;
+
+/// `attention_head_dim` is a number (SD 1.5) or one per block (SD 2.x).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum PerBlock {
+    One(usize),
+    Each(Vec<usize>),
+}
+
+impl PerBlock {
+    fn get(&self, i: usize) -> usize {
+        match self {
+            PerBlock::One(v) => *v,
+            PerBlock::Each(v) => v.get(i).or(v.last()).copied().unwrap_or(8),
+        }
+    }
+}
+
+/// UNet2DConditionModel / ControlNetModel configuration (shared keys).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(default)]
+pub struct UnetConfig {
+    pub in_channels: usize,
+    pub out_channels: usize,
+    pub block_out_channels: Vec<usize>,
+    pub down_block_types: Vec<String>,
+    pub layers_per_block: usize,
+    pub cross_attention_dim: usize,
+    pub attention_head_dim: PerBlock,
+    pub norm_num_groups: usize,
+    pub norm_eps: f64,
+    pub flip_sin_to_cos: bool,
+    pub freq_shift: f64,
+    pub use_linear_projection: bool,
+    pub downsample_padding: usize,
+    pub mid_block_scale_factor: f64,
+    pub transformer_layers_per_block: usize,
+    /// ControlNet only: channels of the condition embedding's convolutions.
+    pub conditioning_embedding_out_channels: Vec<usize>,
+    /// ControlNet only: channels of the condition image.
+    pub conditioning_channels: usize,
+}
+
+impl Default for UnetConfig {
+    fn default() -> Self {
+        Self {
+            in_channels: 4,
+            out_channels: 4,
+            block_out_channels: vec![320, 640, 1280, 1280],
+            down_block_types: vec![
+                "CrossAttnDownBlock2D".into(),
+                "CrossAttnDownBlock2D".into(),
+                "CrossAttnDownBlock2D".into(),
+                "DownBlock2D".into(),
+            ],
+            layers_per_block: 2,
+            cross_attention_dim: 768,
+            attention_head_dim: PerBlock::One(8),
+            norm_num_groups: 32,
+            norm_eps: 1e-5,
+            flip_sin_to_cos: true,
+            freq_shift: 0.0,
+            use_linear_projection: false,
+            downsample_padding: 1,
+            mid_block_scale_factor: 1.0,
+            transformer_layers_per_block: 1,
+            conditioning_embedding_out_channels: vec![16, 32, 96, 256],
+            conditioning_channels: 3,
+        }
+    }
+}
+
+impl UnetConfig {
+    /// candle-transformers' UNet configuration for these values.
+    pub fn to_candle(&self) -> Result<unet_2d::UNet2DConditionModelConfig, DiffuseError> {
+        if self.block_out_channels.len() != self.down_block_types.len() {
+            return Err(DiffuseError::Config(
+                "block_out_channels and down_block_types differ in length".into(),
+            ));
+        }
+        let blocks = self
+            .block_out_channels
+            .iter()
+            .zip(&self.down_block_types)
+            .enumerate()
+            .map(|(i, (&out_channels, kind))| unet_2d::BlockConfig {
+                out_channels,
+                use_cross_attn: kind
+                    .starts_with("CrossAttn")
+                    .then_some(self.transformer_layers_per_block),
+                attention_head_dim: self.attention_head_dim.get(i),
+            })
+            .collect();
+        Ok(unet_2d::UNet2DConditionModelConfig {
+            center_input_sample: false,
+            flip_sin_to_cos: self.flip_sin_to_cos,
+            freq_shift: self.freq_shift,
+            blocks,
+            layers_per_block: self.layers_per_block,
+            downsample_padding: self.downsample_padding,
+            mid_block_scale_factor: self.mid_block_scale_factor,
+            norm_num_groups: self.norm_num_groups,
+            norm_eps: self.norm_eps,
+            cross_attention_dim: self.cross_attention_dim,
+            sliced_attention_size: None,
+            use_linear_projection: self.use_linear_projection,
+        })
+    }
+}
+
+/// AutoencoderKL configuration.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(default)]
+pub struct VaeConfig {
+    pub block_out_channels: Vec<usize>,
+    pub layers_per_block: usize,
+    pub latent_channels: usize,
+    pub norm_num_groups: usize,
+    pub scaling_factor: f64,
+    pub use_quant_conv: bool,
+    pub use_post_quant_conv: bool,
+}
+
+impl Default for VaeConfig {
+    fn default() -> Self {
+        Self {
+            block_out_channels: vec![128, 256, 512, 512],
+            layers_per_block: 2,
+            latent_channels: 4,
+            norm_num_groups: 32,
+            scaling_factor: 0.18215,
+            use_quant_conv: true,
+            use_post_quant_conv: true,
+        }
+    }
+}
+
+impl VaeConfig {
+    pub fn to_candle(&self) -> vae::AutoEncoderKLConfig {
+        vae::AutoEncoderKLConfig {
+            block_out_channels: self.block_out_channels.clone(),
+            layers_per_block: self.layers_per_block,
+            latent_channels: self.latent_channels,
+            norm_num_groups: self.norm_num_groups,
+            use_quant_conv: self.use_quant_conv,
+            use_post_quant_conv: self.use_post_quant_conv,
+        }
+    }
+
+    /// Pixels per latent cell along each axis.
+    pub fn scale_factor(&self) -> usize {
+        1 << self.block_out_channels.len().saturating_sub(1)
+    }
+}
+
+/// CLIPTextModel configuration (transformers' `CLIPTextConfig`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(default)]
+pub struct TextConfig {
+    pub vocab_size: usize,
+    pub hidden_size: usize,
+    pub intermediate_size: usize,
+    pub num_hidden_layers: usize,
+    pub num_attention_heads: usize,
+    pub max_position_embeddings: usize,
+    pub hidden_act: String,
+    pub layer_norm_eps: f64,
+}
+
+impl Default for TextConfig {
+    fn default() -> Self {
+        Self {
+            vocab_size: 49408,
+            hidden_size: 768,
+            intermediate_size: 3072,
+            num_hidden_layers: 12,
+            num_attention_heads: 12,
+            max_position_embeddings: 77,
+            hidden_act: "quick_gelu".into(),
+            layer_norm_eps: 1e-5,
+        }
+    }
+}
+
+/// Reads `config.json` in `dir`, or the SD 1.5 defaults when there is none.
+pub fn read_config<T: for<'de> Deserialize<'de> + Default>(dir: &Path) -> Result<T, DiffuseError> {
+    let path = dir.join("config.json");
+    if !path.exists() {
+        return Ok(T::default());
+    }
+    let text = std::fs::read_to_string(&path).map_err(|e| DiffuseError::bad_model(&path, e))?;
+    serde_json::from_str(&text).map_err(|e| DiffuseError::bad_model(&path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sd15_defaults_match_candle_v1_5_layout() {
+        let c = UnetConfig::default().to_candle().unwrap();
+        assert_eq!(c.blocks.len(), 4);
+        assert_eq!(c.blocks[3].use_cross_attn, None);
+        assert_eq!(c.cross_attention_dim, 768);
+        assert_eq!(VaeConfig::default().scale_factor(), 8);
+    }
+
+    #[test]
+    fn per_block_head_dims_parse() {
+        let c: UnetConfig = serde_json::from_str(r#"{"attention_head_dim":[5,10,20,20]}"#).unwrap();
+        assert_eq!(c.to_candle().unwrap().blocks[2].attention_head_dim, 20);
+    }
+}

@@ -1,0 +1,149 @@
+//! The StableDiffusionControlNetPipeline loop: prompt embeddings with
+//! classifier-free guidance, ControlNet residuals into the UNet at each
+//! scheduler step, VAE decode to an image in [0, 1].
+
+use std::path::Path;
+
+use candle_core::{DType, Device, Tensor};
+
+use crate::DiffuseError;
+use crate::schedule::{Scheduler, SchedulerKind};
+use crate::tokenizer::ClipTokenizer;
+use crate::weights::{MERGES_FILE, Models};
+
+/// Per-run knobs of the denoising loop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoiseParams {
+    pub steps: usize,
+    /// Classifier-free guidance weight; guidance is off at 1 or below.
+    pub guidance_scale: f64,
+    /// Multiplies the ControlNet residuals.
+    pub conditioning_scale: f64,
+    pub scheduler: SchedulerKind,
+}
+
+/// SD 1.5 + ControlNet, loaded and ready to generate.
+pub struct ControlnetPipeline {
+    pub models: Models,
+    pub tokenizer: ClipTokenizer,
+    pub dtype: DType,
+    pub device: Device,
+}
+
+impl ControlnetPipeline {
+    /// Loads the models and tokenizer from diffusers-layout folders.
+    pub fn load(
+        sd_dir: &Path,
+        controlnet_dir: &Path,
+        dtype: DType,
+        device: &Device,
+    ) -> Result<Self, DiffuseError> {
+        let models = Models::load(sd_dir, controlnet_dir, dtype, device)?;
+        let tokenizer = ClipTokenizer::from_merges_file(&sd_dir.join(MERGES_FILE))?;
+        Ok(Self {
+            models,
+            tokenizer,
+            dtype,
+            device: device.clone(),
+        })
+    }
+
+    /// Pixels per latent cell (8 for SD 1.5).
+    pub fn vae_scale(&self) -> usize {
+        self.models.vae_config.scale_factor()
+    }
+
+    /// Text-encoder hidden states `(1, 77, dim)` of a prompt.
+    pub fn encode_prompt(&self, prompt: &str) -> Result<Tensor, DiffuseError> {
+        let ids = self.tokenizer.encode(prompt);
+        let ids = Tensor::new(ids.as_slice(), &self.device)?.unsqueeze(0)?;
+        Ok(self.models.text.forward(&ids)?)
+    }
+
+    /// The cross-attention context for one image: `[negative; prompt]` when
+    /// guidance is on (diffusers' order), else the prompt alone.
+    pub fn context(
+        &self,
+        prompt: &str,
+        negative: &str,
+        guidance_scale: f64,
+    ) -> Result<Tensor, DiffuseError> {
+        let pos = self.encode_prompt(prompt)?;
+        if guidance_scale > 1.0 {
+            Ok(Tensor::cat(&[&self.encode_prompt(negative)?, &pos], 0)?)
+        } else {
+            Ok(pos)
+        }
+    }
+
+    /// Denoises `latents` `(B, 4, h, w)` under `control` `(B, 3, 8h, 8w)` in
+    /// [0, 1]; returns the decoded images `(B, 3, 8h, 8w)` in [0, 1] as f32.
+    pub fn generate(
+        &self,
+        context: &Tensor,
+        control: &Tensor,
+        latents: &Tensor,
+        p: &DenoiseParams,
+    ) -> Result<Tensor, DiffuseError> {
+        let b = latents.dim(0)?;
+        let guided = p.guidance_scale > 1.0;
+        let copies = if guided { 2 } else { 1 };
+        if context.dim(0)? != copies {
+            return Err(DiffuseError::Config(format!(
+                "context has {} rows, guidance needs {copies}",
+                context.dim(0)?
+            )));
+        }
+        let (_, n, d) = context.dims3()?;
+        // Rows: B unconditional then B conditional, as diffusers concatenates.
+        let ctx = context
+            .unsqueeze(1)?
+            .broadcast_as((copies, b, n, d))?
+            .reshape((copies * b, n, d))?
+            .to_dtype(self.dtype)?;
+        let control = control.to_dtype(self.dtype)?;
+        let control = if guided {
+            Tensor::cat(&[&control, &control], 0)?
+        } else {
+            control
+        };
+        let mut x = latents.to_dtype(self.dtype)?;
+        let mut sched = Scheduler::new(p.scheduler, p.steps);
+        let timesteps = sched.timesteps().to_vec();
+        for &t in &timesteps {
+            let input = if guided {
+                Tensor::cat(&[&x, &x], 0)?
+            } else {
+                x.clone()
+            };
+            let t = t as f64;
+            let res =
+                self.models
+                    .controlnet
+                    .forward(&input, t, &ctx, &control, p.conditioning_scale)?;
+            let eps = self.models.unet.forward_with_additional_residuals(
+                &input,
+                t,
+                &ctx,
+                Some(&res.down),
+                Some(&res.mid),
+            )?;
+            let eps = if guided {
+                let u = eps.narrow(0, 0, b)?;
+                let c = eps.narrow(0, b, b)?;
+                (&u + ((c - &u)? * p.guidance_scale)?)?
+            } else {
+                eps
+            };
+            x = sched.step(&eps, &x)?;
+        }
+        let x = (x / self.models.vae_config.scaling_factor)?;
+        // candle-transformers 0.11.1's VAE decoder mixes the images of a batch
+        // (its mid-block attention), so decode one image at a time.
+        let imgs = (0..b)
+            .map(|i| self.models.vae.decode(&x.narrow(0, i, 1)?))
+            .collect::<candle_core::Result<Vec<_>>>()?;
+        let img = Tensor::cat(&imgs, 0)?;
+        Ok(((img.to_dtype(DType::F32)? / 2.0)? + 0.5)?.clamp(0f32, 1f32)?)
+    }
+}

@@ -1,0 +1,53 @@
+//! Shared helpers for the fixture tests.
+#![allow(dead_code)]
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+use candle_core::{DType, Device, Tensor};
+
+pub fn fixtures() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
+}
+
+pub fn tiny() -> PathBuf {
+    fixtures().join("tiny")
+}
+
+/// Reference tensors written by tools/diffuse/make_fixtures.py.
+pub fn expected() -> HashMap<String, Tensor> {
+    candle_core::safetensors::load(fixtures().join("expected.safetensors"), &Device::Cpu)
+        .expect("expected.safetensors")
+}
+
+/// max |ours - ref| / max |ref|.
+pub fn rel_err(ours: &Tensor, reference: &Tensor) -> f64 {
+    assert_eq!(ours.dims(), reference.dims(), "shape");
+    let a = ours
+        .to_dtype(DType::F64)
+        .unwrap()
+        .flatten_all()
+        .unwrap()
+        .to_vec1::<f64>()
+        .unwrap();
+    let b = reference
+        .to_dtype(DType::F64)
+        .unwrap()
+        .flatten_all()
+        .unwrap()
+        .to_vec1::<f64>()
+        .unwrap();
+    let diff = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    let scale = b.iter().map(|y| y.abs()).fold(0.0, f64::max).max(1e-12);
+    diff / scale
+}
+
+pub fn assert_close(name: &str, ours: &Tensor, reference: &Tensor, tol: f64) {
+    let e = rel_err(ours, reference);
+    println!("{name}: max relative error {e:.3e}");
+    assert!(e <= tol, "{name}: relative error {e:.3e} > {tol:.0e}");
+}
