@@ -27,6 +27,13 @@ impl ControlnetRegenerator {
                 config.backend
             )));
         }
+        if config.dtype == crate::Dtype::Bf16 {
+            // candle 0.11.1 has no bf16 matmul on CPU; GPU builds come with issue 10.
+            return Err(DiffuseError::Config(
+                "regenerator.dtype = \"bf16\" needs a GPU build; on CPU use \"f32\" or \"f16\""
+                    .into(),
+            ));
+        }
         let sd = ctx.model_path(&config.sd_path);
         let cn = ctx.model_path(&config.controlnet_path);
         weights::check_files(&sd, &cn)?;
