@@ -35,7 +35,7 @@ def mediapipe_ms(rounds: int) -> float:
 
 def ours_ms(models: str, backend: str, rounds: int) -> float:
     target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
-    exe = os.path.join(target, "release", "examples", "blazepose_bench")
+    exe = os.path.join(target, os.environ.get("BENCH_PROFILE_DIR", "release"), "examples", "blazepose_bench")
     out = subprocess.run([exe, models, backend, str(rounds)] + FRAMES, check=True, capture_output=True, text=True)
     return float(out.stdout.strip())
 
