@@ -80,6 +80,39 @@ mod tests {
         );
     }
 
+    /// The way the stage crates hold it: a variant of their `kind`-tagged
+    /// config enum (serde removes `kind` before the variant sees the table).
+    #[derive(Debug, Deserialize)]
+    #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+    enum StageTable {
+        #[allow(dead_code, reason = "only parsed")]
+        Canny {
+            low: f64,
+        },
+        Plugin(PluginConfig),
+    }
+
+    #[test]
+    fn as_a_variant_of_a_kind_tagged_enum() {
+        let t: StageTable =
+            toml::from_str("kind = \"plugin\"\npath = \"x.so\"\n[options]\nthreshold = 2").unwrap();
+        let StageTable::Plugin(c) = t else {
+            panic!("not a plugin: {t:?}")
+        };
+        assert_eq!(c.options_json(), r#"{"threshold":2}"#);
+        let err = toml::from_str::<StageTable>("kind = \"plugin\"\npath = \"x.so\"\nthreshold = 2")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("threshold") && err.contains("options"),
+            "{err}"
+        );
+        let err = toml::from_str::<StageTable>("kind = \"plugn\"")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("plugin") && err.contains("canny"), "{err}");
+    }
+
     #[test]
     fn path_is_required() {
         let err = toml::from_str::<PluginConfig>("").unwrap_err().to_string();

@@ -158,8 +158,8 @@ unsafe extern "C" fn create<T: PluginStage>(
         // SAFETY: the host passes valid strings for the duration of the call.
         let json = unsafe { host_str(options_json, "options") }?;
         let json = if json.is_empty() { "{}" } else { json };
-        let options: T::Options = serde_json::from_str(json)
-            .map_err(|e| StageError::BadInput(format!("options: {e}")))?;
+        let options: T::Options =
+            serde_json::from_str(json).map_err(|e| StageError::BadInput(e.to_string()))?;
         // SAFETY: as above.
         let ctx = StageContext::new(unsafe { host_str(models_dir, "models_dir") }?);
         let stage = Box::new(T::create(options, &ctx)?);

@@ -4,6 +4,7 @@
 use gait_core::StageContext;
 use libloading::Library;
 use std::ffi::c_void;
+use std::sync::Mutex;
 
 use crate::PluginConfig;
 use crate::abi::{
@@ -15,14 +16,13 @@ use crate::error::PluginError;
 /// Longest error message copied from a plugin; longer ones are cut.
 const MAX_MESSAGE: usize = 64 * 1024;
 
-/// One live plugin instance. Dropping it destroys the instance, then unloads
-/// the library (fields drop after `Drop::drop`).
+/// One live plugin instance. Dropping it destroys the instance; the library
+/// stays loaded (see [`open`]).
 pub(crate) struct Instance {
     pub(crate) raw: *mut c_void,
     pub(crate) descriptor: GaitPluginDescriptor,
     pub(crate) release: ReleaseFn,
     pub(crate) name: String,
-    _library: Library,
 }
 
 // SAFETY: the ABI requires instances to be usable from any thread, one call
@@ -88,7 +88,9 @@ pub(crate) fn open(
         path: path.clone(),
         reason: e.to_string(),
     })?;
-    let descriptor = read_descriptor(&library, &path, wanted)?;
+    let descriptor = read_descriptor(&library, &path, wanted);
+    keep_loaded(library);
+    let descriptor = descriptor?;
     let name = plugin_name(&descriptor, &path);
     let create = descriptor.create.ok_or_else(|| missing(&path, "create"))?;
     let release = descriptor
@@ -149,8 +151,19 @@ pub(crate) fn open(
         descriptor,
         release,
         name,
-        _library: library,
     })
+}
+
+/// Libraries are never unloaded: a plugin may have started threads (a
+/// thread pool), registered thread-local destructors or kept caches that
+/// outlive its instances, and unmapping its code under them would crash the
+/// host. Loading the same file again only bumps the loader's reference count.
+fn keep_loaded(library: Library) {
+    static LOADED: Mutex<Vec<Library>> = Mutex::new(Vec::new());
+    LOADED
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+        .push(library);
 }
 
 fn missing(path: &std::path::Path, function: &str) -> PluginError {

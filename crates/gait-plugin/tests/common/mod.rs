@@ -29,7 +29,16 @@ fn profile_dir() -> PathBuf {
 
 fn build_plugins() -> PathBuf {
     let dir = profile_dir();
-    let target = dir.parent().expect("target folder");
+    let parent = dir.parent().expect("target folder");
+    // Tests built with `--target <triple>` (e.g. for sanitizers) live one
+    // level deeper, in `<target>/<triple>/<profile>`; cargo marks the target
+    // folder with CACHEDIR.TAG (and the triple folder too).
+    let (target, triple) = match parent.parent() {
+        Some(root) if root.join("CACHEDIR.TAG").is_file() => {
+            (root, parent.file_name().and_then(|n| n.to_str()))
+        }
+        _ => (parent, None),
+    };
     let profile = match dir.file_name().and_then(|n| n.to_str()) {
         Some("debug") => "dev".to_string(),
         Some(other) => other.to_string(),
@@ -44,6 +53,9 @@ fn build_plugins() -> PathBuf {
         .arg(target)
         .arg("--manifest-path")
         .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../Cargo.toml"));
+    if let Some(triple) = triple {
+        cmd.arg("--target").arg(triple);
+    }
     for p in PLUGINS {
         cmd.arg("-p").arg(p);
     }
