@@ -73,7 +73,7 @@ BENCH="$ROOT/BENCHMARKS.md"
 touch "$BENCH"
 "$PYTHON" - "$BENCH" "$SECTION" <<'PY'
 import re, sys
-bench, section = sys.argv[1], open(sys.argv[2]).read()
+bench, section = sys.argv[1], open(sys.argv[2]).read().rstrip("\n") + "\n\n"
 text = open(bench).read()
 if not text.strip():
     text = "# Benchmarks\n\n"

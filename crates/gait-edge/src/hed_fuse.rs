@@ -99,7 +99,10 @@ mod tests {
     fn sigmoid_mean_and_safe_step() {
         let zero = side(1, 1, vec![0.0]);
         // sigmoid(0) = 0.5 -> 127 (truncated); safe: trunc(1.5) / 2 = 0.5 -> 127.
-        assert_eq!(fuse(&[zero.clone()], 1, 1, None).get_pixel(0, 0)[0], 127);
+        assert_eq!(
+            fuse(std::slice::from_ref(&zero), 1, 1, None).get_pixel(0, 0)[0],
+            127
+        );
         let big = side(1, 1, vec![20.0]);
         assert_eq!(
             fuse(&[big.clone(), big], 1, 1, Some(2)).get_pixel(0, 0)[0],
@@ -107,7 +110,10 @@ mod tests {
         );
         let low = side(1, 1, vec![-1.0]);
         // sigmoid(-1) = 0.269 -> 68; safe: trunc(0.807) = 0 -> 0.
-        assert_eq!(fuse(&[low.clone()], 1, 1, None).get_pixel(0, 0)[0], 68);
+        assert_eq!(
+            fuse(std::slice::from_ref(&low), 1, 1, None).get_pixel(0, 0)[0],
+            68
+        );
         assert_eq!(fuse(&[low], 1, 1, Some(2)).get_pixel(0, 0)[0], 0);
     }
 }
