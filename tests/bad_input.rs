@@ -8,7 +8,10 @@ use std::path::Path;
 
 fn assert_no_results(out: &Path) {
     for f in ["keypoints.csv", "run.json"] {
-        assert!(!out.join(f).exists(), "{f} must not exist after a failed run");
+        assert!(
+            !out.join(f).exists(),
+            "{f} must not exist after a failed run"
+        );
     }
 }
 
@@ -17,7 +20,11 @@ fn missing_video() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     fails_with(
-        gait().args(["run", "--no-progress", "--input"]).arg(dir.path().join("nope.mp4")).arg("--out").arg(&out),
+        gait()
+            .args(["run", "--no-progress", "--input"])
+            .arg(dir.path().join("nope.mp4"))
+            .arg("--out")
+            .arg(&out),
         &["nope.mp4", "no such file"],
     );
     assert_no_results(&out);
@@ -30,7 +37,11 @@ fn corrupt_video() {
     std::fs::write(&video, b"this is not a video at all, just text pretending").unwrap();
     let out = dir.path().join("out");
     fails_with(
-        gait().args(["run", "--no-progress", "--input"]).arg(&video).arg("--out").arg(&out),
+        gait()
+            .args(["run", "--no-progress", "--input"])
+            .arg(&video)
+            .arg("--out")
+            .arg(&out),
         &["broken.mp4", "not a readable video"],
     );
     assert_no_results(&out);
@@ -64,7 +75,11 @@ fn empty_folder() {
     let frames = dir.path().join("frames");
     std::fs::create_dir(&frames).unwrap();
     fails_with(
-        gait().args(["run", "--no-progress", "--input"]).arg(&frames).arg("--out").arg(dir.path().join("out")),
+        gait()
+            .args(["run", "--no-progress", "--input"])
+            .arg(&frames)
+            .arg("--out")
+            .arg(dir.path().join("out")),
         &["frames", "no images"],
     );
 }
@@ -75,7 +90,11 @@ fn unreadable_image() {
     let img = dir.path().join("frame.png");
     std::fs::write(&img, b"\x89PNG but not really").unwrap();
     fails_with(
-        gait().args(["run", "--no-progress", "--input"]).arg(&img).arg("--out").arg(dir.path().join("out")),
+        gait()
+            .args(["run", "--no-progress", "--input"])
+            .arg(&img)
+            .arg("--out")
+            .arg(dir.path().join("out")),
         &["frame.png", "unreadable image"],
     );
 }
@@ -102,7 +121,13 @@ fn unknown_stage_kind_lists_the_choices() {
     let dir = tempfile::tempdir().unwrap();
     fails_with(
         gait()
-            .args(["run", "--no-progress", "--set", "edge.kind=sobelx", "--input"])
+            .args([
+                "run",
+                "--no-progress",
+                "--set",
+                "edge.kind=sobelx",
+                "--input",
+            ])
             .arg(common::sample_video())
             .arg("--out")
             .arg(dir.path().join("out")),
@@ -110,7 +135,13 @@ fn unknown_stage_kind_lists_the_choices() {
     );
     fails_with(
         gait()
-            .args(["run", "--no-progress", "--set", "pose.backend=tensorrt", "--input"])
+            .args([
+                "run",
+                "--no-progress",
+                "--set",
+                "pose.backend=tensorrt",
+                "--input",
+            ])
             .arg(common::sample_video())
             .arg("--out")
             .arg(dir.path().join("out")),
@@ -152,6 +183,9 @@ fn every_subcommand_has_help() {
     for sub in subcommands {
         let out = gait().args([sub.as_str(), "--help"]).output().unwrap();
         assert!(out.status.success(), "gait {sub} --help failed");
-        assert!(String::from_utf8_lossy(&out.stdout).contains("Usage: gait"), "gait {sub} --help");
+        assert!(
+            String::from_utf8_lossy(&out.stdout).contains("Usage: gait"),
+            "gait {sub} --help"
+        );
     }
 }

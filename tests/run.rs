@@ -9,8 +9,21 @@ use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 const NAMES: [&str; 15] = [
-    "nose", "neck", "left_shoulder", "right_shoulder", "mid_hip", "left_hip", "right_hip", "left_knee", "right_knee",
-    "left_ankle", "right_ankle", "left_heel", "right_heel", "left_toe", "right_toe",
+    "nose",
+    "neck",
+    "left_shoulder",
+    "right_shoulder",
+    "mid_hip",
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_ankle",
+    "right_ankle",
+    "left_heel",
+    "right_heel",
+    "left_toe",
+    "right_toe",
 ];
 
 fn run_args(out: &Path, first: usize, last: usize) -> std::process::Command {
@@ -21,7 +34,12 @@ fn run_args(out: &Path, first: usize, last: usize) -> std::process::Command {
         .arg(sample_video())
         .arg("--out")
         .arg(out)
-        .args(["--set", &format!("input.first_frame={first}"), "--set", &format!("input.last_frame={last}")]);
+        .args([
+            "--set",
+            &format!("input.first_frame={first}"),
+            "--set",
+            &format!("input.last_frame={last}"),
+        ]);
     cmd
 }
 
@@ -45,7 +63,11 @@ fn default_pipeline_on_the_sample_video() {
     run_ok(&mut run_args(&out, 150, 157));
 
     let text = std::fs::read_to_string(out.join("keypoints.csv")).unwrap();
-    let header: Vec<Vec<&str>> = text.lines().take(3).map(|l| l.split(',').collect()).collect();
+    let header: Vec<Vec<&str>> = text
+        .lines()
+        .take(3)
+        .map(|l| l.split(',').collect())
+        .collect();
     assert_eq!(header[0][0], "scorer");
     assert_eq!(header[1][0], "bodyparts");
     assert_eq!(header[2][0], "coords");
@@ -54,14 +76,22 @@ fn default_pipeline_on_the_sample_video() {
         assert_eq!(&header[2][1 + 3 * i..4 + 3 * i], ["x", "y", "likelihood"]);
     }
     let data = rows(&out.join("keypoints.csv"));
-    assert_eq!(data.iter().map(|r| r.0).collect::<Vec<_>>(), (150..=157).collect::<Vec<_>>());
+    assert_eq!(
+        data.iter().map(|r| r.0).collect::<Vec<_>>(),
+        (150..=157).collect::<Vec<_>>()
+    );
     // The walker is in view: her knees and ankles are found inside the frame.
     for (frame, cells) in &data {
         for name in ["left_knee", "right_knee", "left_ankle", "right_ankle"] {
             let i = NAMES.iter().position(|n| *n == name).unwrap();
-            let x: f64 = cells[3 * i].parse().unwrap_or_else(|_| panic!("frame {frame}: no {name}"));
+            let x: f64 = cells[3 * i]
+                .parse()
+                .unwrap_or_else(|_| panic!("frame {frame}: no {name}"));
             let y: f64 = cells[3 * i + 1].parse().unwrap();
-            assert!((0.0..1768.0).contains(&x) && (0.0..994.0).contains(&y), "frame {frame} {name} at {x},{y}");
+            assert!(
+                (0.0..1768.0).contains(&x) && (0.0..994.0).contains(&y),
+                "frame {frame} {name} at {x},{y}"
+            );
         }
     }
 
@@ -69,7 +99,13 @@ fn default_pipeline_on_the_sample_video() {
     assert_eq!(manifest["frames_processed"], 8);
     assert_eq!(manifest["input"]["fps"], 30.0);
     assert_eq!(manifest["config"]["pose"]["kind"], "blazepose");
-    assert!(manifest["models"].as_array().unwrap().iter().all(|m| m["sha256"].as_str().is_some_and(|s| s.len() == 64)));
+    assert!(
+        manifest["models"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|m| m["sha256"].as_str().is_some_and(|s| s.len() == 64))
+    );
     assert!(manifest["stages"]["pose"]["seconds"].as_f64().unwrap() > 0.0);
 
     // run.json repeats the run: same keypoints, all from the cache.
@@ -84,7 +120,10 @@ fn default_pipeline_on_the_sample_video() {
             .arg(sample_video())
             .arg("--out")
             .arg(&again)
-            .args(["--set", &format!("run.cache_dir={}", out.join("cache").display())]),
+            .args([
+                "--set",
+                &format!("run.cache_dir={}", out.join("cache").display()),
+            ]),
     );
     assert_eq!(read_json(&again.join("run.json"))["frames_from_cache"], 8);
     assert_eq!(rows(&again.join("keypoints.csv")), data);
@@ -109,31 +148,51 @@ fn interrupted_run_resumes_where_it_stopped() {
             .flatten()
             .filter(|e| e.file_name().to_string_lossy().starts_with("pose-"))
             .flat_map(|e| std::fs::read_dir(e.path()).into_iter().flatten().flatten())
-            .filter(|e| e.file_name().to_string_lossy().ends_with(".json") && e.file_name() != "config.json")
+            .filter(|e| {
+                e.file_name().to_string_lossy().ends_with(".json") && e.file_name() != "config.json"
+            })
             .count()
     };
     while done(&out) < 5 {
         assert!(Instant::now() < deadline, "no progress");
-        assert!(child.try_wait().unwrap().is_none(), "the run ended before it could be interrupted");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before it could be interrupted"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     child.kill().unwrap();
     child.wait().unwrap();
     let finished_before = done(&out);
-    assert!(finished_before < 40, "the run finished before it was killed");
-    assert!(!out.join("keypoints.csv").exists(), "an interrupted run must not leave results");
+    assert!(
+        finished_before < 40,
+        "the run finished before it was killed"
+    );
+    assert!(
+        !out.join("keypoints.csv").exists(),
+        "an interrupted run must not leave results"
+    );
 
     run_ok(&mut run_args(&out, 100, 139));
     let manifest = read_json(&out.join("run.json"));
     assert_eq!(manifest["frames_processed"], 40);
     let from_cache = manifest["frames_from_cache"].as_u64().unwrap() as usize;
-    assert!(from_cache >= 5 && from_cache >= finished_before - 1, "resumed with {from_cache} cached frames");
-    assert_eq!(manifest["stages"]["pose"]["computed"].as_u64().unwrap() as usize, 40 - from_cache);
+    assert!(
+        from_cache >= 5 && from_cache >= finished_before - 1,
+        "resumed with {from_cache} cached frames"
+    );
+    assert_eq!(
+        manifest["stages"]["pose"]["computed"].as_u64().unwrap() as usize,
+        40 - from_cache
+    );
 
     // Same keypoints as an uninterrupted run without a cache.
     let clean = dir.path().join("clean");
     run_ok(run_args(&clean, 100, 139).args(["--set", "run.cache=false"]));
-    let (a, b) = (rows(&out.join("keypoints.csv")), rows(&clean.join("keypoints.csv")));
+    let (a, b) = (
+        rows(&out.join("keypoints.csv")),
+        rows(&clean.join("keypoints.csv")),
+    );
     assert_eq!(a.len(), b.len());
     for ((fa, ca), (fb, cb)) in a.iter().zip(&b) {
         assert_eq!(fa, fb);

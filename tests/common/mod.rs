@@ -13,7 +13,9 @@ pub fn sample_video() -> PathBuf {
 pub fn models_dir() -> PathBuf {
     match std::env::var_os("GAIT_MODELS_DIR") {
         Some(d) if Path::new(&d).is_dir() => PathBuf::from(d),
-        _ => panic!("GAIT_MODELS_DIR is not set to a folder with the models: run the tests through tools/test.sh"),
+        _ => panic!(
+            "GAIT_MODELS_DIR is not set to a folder with the models: run the tests through tools/test.sh"
+        ),
     }
 }
 
@@ -37,7 +39,11 @@ pub fn run_ok(cmd: &mut Command) -> Output {
 pub fn fails_with(cmd: &mut Command, needles: &[&str]) -> String {
     let out = cmd.output().expect("gait runs");
     let err = String::from_utf8_lossy(&out.stderr).to_string();
-    assert_eq!(out.status.code(), Some(2), "expected exit code 2, stderr: {err}");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "expected exit code 2, stderr: {err}"
+    );
     let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
     assert_eq!(lines.len(), 1, "expected one line on stderr, got: {err}");
     assert!(lines[0].starts_with("error: "), "{err}");

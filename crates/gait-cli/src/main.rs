@@ -28,6 +28,12 @@ struct Cli {
 enum Command {
     /// Run the pipeline on a video, an image folder or an image.
     Run(commands::run::Args),
+    /// Angles, gait events and cycles from a keypoints CSV.
+    Kin(commands::kin::Args),
+    /// Score predicted keypoints and angles against ground truth.
+    Eval(commands::eval::Args),
+    /// Obtain and list model files.
+    Models(commands::models::Args),
 }
 
 fn main() -> ExitCode {
@@ -35,6 +41,9 @@ fn main() -> ExitCode {
     let models_dir = commands::models_dir(cli.models_dir);
     let result: Result<(), CliError> = match cli.command {
         Command::Run(args) => commands::run::execute(args, &models_dir),
+        Command::Kin(args) => commands::kin::execute(args, &models_dir),
+        Command::Eval(args) => commands::eval::execute(args, &models_dir),
+        Command::Models(args) => commands::models::execute(args, &models_dir),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

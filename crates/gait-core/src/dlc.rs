@@ -58,7 +58,11 @@ pub fn write<W: Write>(out: W, scorer: &str, seq: &PoseSequence) -> Result<(), D
 
 /// Reads a DeepLabCut CSV. For multi-animal files, `individual` picks one
 /// (the first when `None`). `fps` is not stored in the file.
-pub fn read<R: Read>(input: R, individual: Option<&str>, fps: f64) -> Result<PoseSequence, DlcError> {
+pub fn read<R: Read>(
+    input: R,
+    individual: Option<&str>,
+    fps: f64,
+) -> Result<PoseSequence, DlcError> {
     let mut r = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
@@ -96,7 +100,9 @@ pub fn read<R: Read>(input: R, individual: Option<&str>, fps: f64) -> Result<Pos
     let chosen = match (&individuals, individual) {
         (Some(ind), Some(name)) => {
             if !ind.iter().skip(1).any(|i| i == name) {
-                return Err(DlcError::Layout(format!("no individual `{name}` in the file")));
+                return Err(DlcError::Layout(format!(
+                    "no individual `{name}` in the file"
+                )));
             }
             Some(name.to_string())
         }
@@ -133,7 +139,10 @@ pub fn read<R: Read>(input: R, individual: Option<&str>, fps: f64) -> Result<Pos
         };
         columns[idx][slot] = Some(col);
     }
-    if let Some(i) = columns.iter().position(|c| c[0].is_none() || c[1].is_none()) {
+    if let Some(i) = columns
+        .iter()
+        .position(|c| c[0].is_none() || c[1].is_none())
+    {
         return Err(DlcError::Layout(format!(
             "body part `{}` lacks an x or y column",
             names[i]

@@ -39,6 +39,8 @@ pub enum RegeneratorConfig {
     Passthrough,
     /// SD 1.5 + ControlNet redraws each frame from its edge map.
     Controlnet(ControlnetConfig),
+    /// An external regenerator loaded from a shared library (see docs/adding-a-stage.md).
+    Plugin(gait_plugin::PluginConfig),
 }
 
 impl RegeneratorConfig {
@@ -46,6 +48,7 @@ impl RegeneratorConfig {
         match self {
             RegeneratorConfig::Passthrough => Ok(Box::new(Passthrough)),
             RegeneratorConfig::Controlnet(c) => Ok(Box::new(ControlnetRegenerator::new(c, ctx)?)),
+            RegeneratorConfig::Plugin(p) => Ok(gait_plugin::load_regenerator(p, ctx)?),
         }
     }
 
@@ -54,6 +57,8 @@ impl RegeneratorConfig {
         match self {
             RegeneratorConfig::Passthrough => false,
             RegeneratorConfig::Controlnet(_) => true,
+            // The plugin ABI cannot declare it; plugins get edges when [edge] makes them.
+            RegeneratorConfig::Plugin(_) => false,
         }
     }
 
@@ -71,6 +76,7 @@ impl RegeneratorConfig {
                 &ctx.model_path(&c.sd_path),
                 &ctx.model_path(&c.controlnet_path),
             ),
+            RegeneratorConfig::Plugin(p) => vec![p.resolved_path()],
         }
     }
 }

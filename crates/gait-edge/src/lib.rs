@@ -33,6 +33,8 @@ pub enum EdgeConfig {
     Canny(CannyConfig),
     /// ControlNet's HED soft-edge annotator on candle or ort.
     Hed(HedConfig),
+    /// An external detector loaded from a shared library (see docs/adding-a-stage.md).
+    Plugin(gait_plugin::PluginConfig),
 }
 
 impl EdgeConfig {
@@ -45,6 +47,7 @@ impl EdgeConfig {
                 Ok(Some(Box::new(CannyDetector::new(c))))
             }
             EdgeConfig::Hed(c) => Ok(Some(Box::new(c.build(ctx)?))),
+            EdgeConfig::Plugin(p) => Ok(Some(gait_plugin::load_edge_detector(p, ctx)?)),
         }
     }
 
@@ -53,6 +56,7 @@ impl EdgeConfig {
         match self {
             EdgeConfig::None | EdgeConfig::Canny(_) => Vec::new(),
             EdgeConfig::Hed(c) => vec![c.weights_path(ctx)],
+            EdgeConfig::Plugin(p) => vec![p.resolved_path()],
         }
     }
 }

@@ -35,7 +35,12 @@ impl StageCache {
 
     /// Opens (creating) `<root>/<stage>-<key prefix>`, recording the stage's
     /// config beside the results for people browsing the cache.
-    pub(crate) fn open(root: &Path, stage: &str, key: &str, config: &impl Serialize) -> Result<Self, PipelineError> {
+    pub(crate) fn open(
+        root: &Path,
+        stage: &str,
+        key: &str,
+        config: &impl Serialize,
+    ) -> Result<Self, PipelineError> {
         let dir = root.join(format!("{stage}-{}", &key[..16]));
         std::fs::create_dir_all(&dir).map_err(|e| cache_err(&dir, e))?;
         let about = dir.join("config.json");
@@ -47,7 +52,9 @@ impl StageCache {
     }
 
     fn file(&self, index: usize, ext: &str) -> Option<PathBuf> {
-        self.dir.as_ref().map(|d| d.join(format!("{index:06}.{ext}")))
+        self.dir
+            .as_ref()
+            .map(|d| d.join(format!("{index:06}.{ext}")))
     }
 
     pub(crate) fn load_rgb(&self, index: usize) -> Option<image::RgbImage> {
@@ -55,8 +62,18 @@ impl StageCache {
         image::open(path).ok().map(|i| i.to_rgb8())
     }
 
-    pub(crate) fn store_rgb(&self, index: usize, img: &image::RgbImage) -> Result<(), PipelineError> {
-        self.store_png(index, img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8)
+    pub(crate) fn store_rgb(
+        &self,
+        index: usize,
+        img: &image::RgbImage,
+    ) -> Result<(), PipelineError> {
+        self.store_png(
+            index,
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::Rgb8,
+        )
     }
 
     /// An edge map and the resize it was made with.
@@ -66,18 +83,46 @@ impl StageCache {
         Some((img, serde_json::from_str(&text).ok()?))
     }
 
-    pub(crate) fn store_edge(&self, index: usize, img: &image::GrayImage, resize: &Resize) -> Result<(), PipelineError> {
-        let Some(path) = self.file(index, "json") else { return Ok(()) };
+    pub(crate) fn store_edge(
+        &self,
+        index: usize,
+        img: &image::GrayImage,
+        resize: &Resize,
+    ) -> Result<(), PipelineError> {
+        let Some(path) = self.file(index, "json") else {
+            return Ok(());
+        };
         let json = serde_json::to_vec(resize).unwrap_or_default();
         atomic::write(&path, &json).map_err(|e| cache_err(&path, e))?;
-        self.store_png(index, img.as_raw(), img.width(), img.height(), image::ExtendedColorType::L8)
+        self.store_png(
+            index,
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::L8,
+        )
     }
 
-    fn store_png(&self, index: usize, raw: &[u8], w: u32, h: u32, color: image::ExtendedColorType) -> Result<(), PipelineError> {
-        let Some(path) = self.file(index, "png") else { return Ok(()) };
+    fn store_png(
+        &self,
+        index: usize,
+        raw: &[u8],
+        w: u32,
+        h: u32,
+        color: image::ExtendedColorType,
+    ) -> Result<(), PipelineError> {
+        let Some(path) = self.file(index, "png") else {
+            return Ok(());
+        };
         atomic::write_with(&path, |out| {
-            image::ImageEncoder::write_image(image::codecs::png::PngEncoder::new(out), raw, w, h, color)
-                .map_err(std::io::Error::other)
+            image::ImageEncoder::write_image(
+                image::codecs::png::PngEncoder::new(out),
+                raw,
+                w,
+                h,
+                color,
+            )
+            .map_err(std::io::Error::other)
         })
         .map_err(|e| cache_err(&path, e))
     }
@@ -95,7 +140,9 @@ impl StageCache {
     }
 
     pub(crate) fn store_pose(&self, index: usize, pose: &Pose) -> Result<(), PipelineError> {
-        let Some(path) = self.file(index, "json") else { return Ok(()) };
+        let Some(path) = self.file(index, "json") else {
+            return Ok(());
+        };
         // JSON has no NaN: a missing keypoint is `null`.
         let rows: Vec<Option<[f64; 3]>> = pose
             .keypoints
@@ -120,11 +167,30 @@ mod tests {
 
     #[test]
     fn keys_change_with_any_upstream_config() {
-        let a = chain_key("input", "edge", &serde_json::json!({"kind": "canny", "low": 100}));
-        let b = chain_key("input", "edge", &serde_json::json!({"kind": "canny", "low": 101}));
-        let c = chain_key("other-input", "edge", &serde_json::json!({"kind": "canny", "low": 100}));
+        let a = chain_key(
+            "input",
+            "edge",
+            &serde_json::json!({"kind": "canny", "low": 100}),
+        );
+        let b = chain_key(
+            "input",
+            "edge",
+            &serde_json::json!({"kind": "canny", "low": 101}),
+        );
+        let c = chain_key(
+            "other-input",
+            "edge",
+            &serde_json::json!({"kind": "canny", "low": 100}),
+        );
         assert!(a != b && a != c && b != c);
-        assert_eq!(a, chain_key("input", "edge", &serde_json::json!({"kind": "canny", "low": 100})));
+        assert_eq!(
+            a,
+            chain_key(
+                "input",
+                "edge",
+                &serde_json::json!({"kind": "canny", "low": 100})
+            )
+        );
     }
 
     #[test]

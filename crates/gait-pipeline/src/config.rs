@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use gait_diffuse::RegeneratorConfig;
 use gait_edge::EdgeConfig;
+use gait_kin::{KinematicsConfig, PostprocessConfig};
 use gait_pose::PoseConfig;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -72,16 +73,31 @@ pub struct PipelineConfig {
     pub edge: EdgeConfig,
     pub regenerator: RegeneratorConfig,
     pub pose: PoseConfig,
+    /// Keypoint clean-up before the angles (gait-kin).
+    pub postprocess: PostprocessConfig,
+    /// Angles, gait events, cycles and spatiotemporal parameters (gait-kin).
+    pub kinematics: KinematicsConfig,
 }
 
-const TABLES: [&str; 5] = ["input", "run", "edge", "regenerator", "pose"];
+const TABLES: [&str; 7] = [
+    "input",
+    "run",
+    "edge",
+    "regenerator",
+    "pose",
+    "postprocess",
+    "kinematics",
+];
 
 impl PipelineConfig {
     /// Loads `path` (a pipeline TOML, or a previous run's `run.json` to
     /// repeat that run), or the built-in default, then applies `sets`.
     pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Self, PipelineError> {
         let (origin, mut table) = match path {
-            None => ("configs/default.toml (built in)".to_string(), parse_toml("default", DEFAULT_TOML)?),
+            None => (
+                "configs/default.toml (built in)".to_string(),
+                parse_toml("default", DEFAULT_TOML)?,
+            ),
             Some(p) => {
                 let origin = p.display().to_string();
                 let text = std::fs::read_to_string(p).map_err(|e| {
@@ -106,7 +122,10 @@ impl PipelineConfig {
         if let Some(bad) = table.keys().find(|k| !TABLES.contains(&k.as_str())) {
             return Err(PipelineError::config(
                 origin,
-                format!("unknown table `[{bad}]`; valid tables: {}", TABLES.join(", ")),
+                format!(
+                    "unknown table `[{bad}]`; valid tables: {}",
+                    TABLES.join(", ")
+                ),
             ));
         }
         let defaults = parse_toml("default", DEFAULT_TOML)?;
@@ -115,7 +134,10 @@ impl PipelineConfig {
                 None => toml::Table::new(),
                 Some(toml::Value::Table(t)) => t,
                 Some(_) => {
-                    return Err(PipelineError::config(origin, format!("`{name}` must be a table `[{name}]`")));
+                    return Err(PipelineError::config(
+                        origin,
+                        format!("`{name}` must be a table `[{name}]`"),
+                    ));
                 }
             };
             Ok(with_default_kind(given, defaults.get(name)))
@@ -126,6 +148,8 @@ impl PipelineConfig {
             edge: table_as(origin, "edge", take("edge")?)?,
             regenerator: table_as(origin, "regenerator", take("regenerator")?)?,
             pose: table_as(origin, "pose", take("pose")?)?,
+            postprocess: table_as(origin, "postprocess", take("postprocess")?)?,
+            kinematics: table_as(origin, "kinematics", take("kinematics")?)?,
         };
         config.validate(origin)?;
         Ok(config)
@@ -133,16 +157,33 @@ impl PipelineConfig {
 
     fn validate(&self, origin: &str) -> Result<(), PipelineError> {
         if self.run.batch_size == 0 {
-            return Err(PipelineError::config(origin, "[run] batch_size must be at least 1"));
+            return Err(PipelineError::config(
+                origin,
+                "[run] batch_size must be at least 1",
+            ));
         }
         if let Some(last) = self.input.last_frame
             && last < self.input.first_frame
         {
-            return Err(PipelineError::config(origin, "[input] last_frame is before first_frame"));
+            return Err(PipelineError::config(
+                origin,
+                "[input] last_frame is before first_frame",
+            ));
         }
         if self.input.fps.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
-            return Err(PipelineError::config(origin, "[input] fps must be a positive number"));
+            return Err(PipelineError::config(
+                origin,
+                "[input] fps must be a positive number",
+            ));
         }
+        // The frame rate is known only once the input is open; 30 stands in
+        // for checks that do not depend on it.
+        self.postprocess
+            .validate(self.input.fps.unwrap_or(30.0))
+            .map_err(|e| PipelineError::config(origin, format!("[postprocess]: {e}")))?;
+        self.kinematics
+            .validate()
+            .map_err(|e| PipelineError::config(origin, format!("[kinematics]: {e}")))?;
         if self.regenerator.needs_edges() && matches!(self.edge, EdgeConfig::None) {
             return Err(PipelineError::config(
                 origin,
@@ -166,11 +207,14 @@ fn parse_toml(origin: &str, text: &str) -> Result<toml::Table, PipelineError> {
 /// A run.json holds the resolved config under `config`; running from it
 /// repeats that run.
 fn from_run_json(origin: &str, text: &str) -> Result<toml::Table, PipelineError> {
-    let json: serde_json::Value =
-        serde_json::from_str(text).map_err(|e| PipelineError::config(origin, format!("not valid JSON ({e})")))?;
-    let config = json
-        .get("config")
-        .ok_or_else(|| PipelineError::config(origin, "a .json config must be a run.json with a `config` field"))?;
+    let json: serde_json::Value = serde_json::from_str(text)
+        .map_err(|e| PipelineError::config(origin, format!("not valid JSON ({e})")))?;
+    let config = json.get("config").ok_or_else(|| {
+        PipelineError::config(
+            origin,
+            "a .json config must be a run.json with a `config` field",
+        )
+    })?;
     toml::Table::try_from(config).map_err(|e| PipelineError::config(origin, e))
 }
 
@@ -185,9 +229,14 @@ fn with_default_kind(mut given: toml::Table, default: Option<&toml::Value>) -> t
     given
 }
 
-fn table_as<T: DeserializeOwned>(origin: &str, name: &str, table: toml::Table) -> Result<T, PipelineError> {
-    T::deserialize(toml::Value::Table(table))
-        .map_err(|e| PipelineError::config(origin, format!("[{name}]: {}", one_line(&e.to_string()))))
+fn table_as<T: DeserializeOwned>(
+    origin: &str,
+    name: &str,
+    table: toml::Table,
+) -> Result<T, PipelineError> {
+    T::deserialize(toml::Value::Table(table)).map_err(|e| {
+        PipelineError::config(origin, format!("[{name}]: {}", one_line(&e.to_string())))
+    })
 }
 
 /// Applies one `table.key=value` override. The value is read as TOML
@@ -199,7 +248,10 @@ fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), PipelineError> {
         .ok_or_else(|| PipelineError::config(&origin, "expected table.key=value"))?;
     let keys: Vec<&str> = path.trim().split('.').collect();
     if keys.len() < 2 || keys.iter().any(|k| k.is_empty()) {
-        return Err(PipelineError::config(&origin, "expected table.key=value, e.g. pose.backend=ort"));
+        return Err(PipelineError::config(
+            &origin,
+            "expected table.key=value, e.g. pose.backend=ort",
+        ));
     }
     let value = format!("v = {raw}")
         .parse::<toml::Table>()
@@ -253,15 +305,32 @@ mod tests {
 
     #[test]
     fn errors_name_the_key_and_the_choices() {
-        let e = load_str("[edge]\nkind = \"sobelx\"\n", &[]).unwrap_err().to_string();
-        assert!(e.contains("[edge]") && e.contains("sobelx") && e.contains("none"), "{e}");
-        let e = load_str("[pose]\nbackend = \"tensorrt\"\n", &[]).unwrap_err().to_string();
-        assert!(e.contains("[pose]") && e.contains("tensorrt") && e.contains("candle") && e.contains("ort"), "{e}");
-        let e = load_str("[pose]\nbackend_typo = 1\n", &[]).unwrap_err().to_string();
+        let e = load_str("[edge]\nkind = \"sobelx\"\n", &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("[edge]") && e.contains("sobelx") && e.contains("none"),
+            "{e}"
+        );
+        let e = load_str("[pose]\nbackend = \"tensorrt\"\n", &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("[pose]")
+                && e.contains("tensorrt")
+                && e.contains("candle")
+                && e.contains("ort"),
+            "{e}"
+        );
+        let e = load_str("[pose]\nbackend_typo = 1\n", &[])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("backend_typo") && e.contains("backend"), "{e}");
         let e = load_str("[edges]\n", &[]).unwrap_err().to_string();
         assert!(e.contains("[edges]") && e.contains("edge"), "{e}");
-        let e = load_str("[run]\nbatch_size = 0\n", &[]).unwrap_err().to_string();
+        let e = load_str("[run]\nbatch_size = 0\n", &[])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("batch_size"), "{e}");
         assert!(load_str("x = [", &[]).is_err());
         assert!(load_str("", &["nodot=1"]).is_err());
@@ -271,7 +340,8 @@ mod tests {
     fn resolved_config_round_trips() {
         let c = load_str("[run]\nbatch_size = 3\n", &[]).unwrap();
         let text = c.to_toml();
-        let back = PipelineConfig::from_table("again", parse_toml("again", &text).unwrap()).unwrap();
+        let back =
+            PipelineConfig::from_table("again", parse_toml("again", &text).unwrap()).unwrap();
         assert_eq!(back, c);
     }
 }

@@ -38,7 +38,10 @@ impl InputInfo {
     /// Inspects `path` without decoding it whole.
     pub fn open(path: &Path) -> Result<Self, PipelineError> {
         if !path.exists() {
-            return Err(PipelineError::input(path, "no such file or folder; check the --input path"));
+            return Err(PipelineError::input(
+                path,
+                "no such file or folder; check the --input path",
+            ));
         }
         if path.is_dir() {
             return Self::folder(path);
@@ -61,7 +64,8 @@ impl InputInfo {
     }
 
     fn folder(dir: &Path) -> Result<Self, PipelineError> {
-        let entries = std::fs::read_dir(dir).map_err(|e| PipelineError::input(dir, format!("cannot list the folder ({e})")))?;
+        let entries = std::fs::read_dir(dir)
+            .map_err(|e| PipelineError::input(dir, format!("cannot list the folder ({e})")))?;
         let mut files: Vec<PathBuf> = entries
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.is_file() && IMAGE_EXTENSIONS.contains(&extension(p).as_str()))
@@ -69,7 +73,10 @@ impl InputInfo {
         if files.is_empty() {
             return Err(PipelineError::input(
                 dir,
-                format!("the folder has no images ({}); put the frames there or give a video", IMAGE_EXTENSIONS.join(", ")),
+                format!(
+                    "the folder has no images ({}); put the frames there or give a video",
+                    IMAGE_EXTENSIONS.join(", ")
+                ),
             ));
         }
         // Natural order, so frame_2 comes before frame_10.
@@ -100,10 +107,16 @@ impl InputInfo {
         };
         for f in &files {
             let mut file = std::fs::File::open(f).map_err(|e| PipelineError::input(f, e))?;
-            hasher.update(f.file_name().map(|n| n.as_encoded_bytes()).unwrap_or_default());
+            hasher.update(
+                f.file_name()
+                    .map(|n| n.as_encoded_bytes())
+                    .unwrap_or_default(),
+            );
             let mut buf = vec![0u8; 1 << 20];
             loop {
-                let n = file.read(&mut buf).map_err(|e| PipelineError::input(f, e))?;
+                let n = file
+                    .read(&mut buf)
+                    .map_err(|e| PipelineError::input(f, e))?;
                 if n == 0 {
                     break;
                 }
@@ -149,9 +162,19 @@ fn extension(path: &Path) -> String {
 }
 
 fn natural_key(path: &Path) -> (String, u64, String) {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let stem = name.rsplit_once('.').map_or(name.as_str(), |(s, _)| s);
-    let digits: String = stem.chars().rev().take_while(char::is_ascii_digit).collect::<Vec<_>>().into_iter().rev().collect();
+    let digits: String = stem
+        .chars()
+        .rev()
+        .take_while(char::is_ascii_digit)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+        .collect();
     let prefix = stem[..stem.len() - digits.len()].to_string();
     (prefix, digits.parse().unwrap_or(0), name)
 }
@@ -159,7 +182,9 @@ fn natural_key(path: &Path) -> (String, u64, String) {
 fn ffmpeg_missing(path: &Path, e: std::io::Error) -> PipelineError {
     PipelineError::input(
         path,
-        format!("cannot run ffmpeg ({e}); install it (Debian: apt-get install ffmpeg) or give a folder of images"),
+        format!(
+            "cannot run ffmpeg ({e}); install it (Debian: apt-get install ffmpeg) or give a folder of images"
+        ),
     )
 }
 
@@ -172,13 +197,21 @@ fn probe_video(path: &Path) -> Result<InputInfo, PipelineError> {
         .stdin(Stdio::null())
         .output()
         .map_err(|e| ffmpeg_missing(path, e))?;
-    let bad = |why: &str| PipelineError::input(path, format!("not a readable video ({why}); check the file or re-encode it"));
+    let bad = |why: &str| {
+        PipelineError::input(
+            path,
+            format!("not a readable video ({why}); check the file or re-encode it"),
+        )
+    };
     if !out.status.success() {
         let msg = String::from_utf8_lossy(&out.stderr);
         return Err(bad(msg.lines().next().unwrap_or("ffprobe failed").trim()));
     }
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).map_err(|_| bad("ffprobe output unreadable"))?;
-    let stream = json["streams"].get(0).ok_or_else(|| bad("no video stream"))?;
+    let json: serde_json::Value =
+        serde_json::from_slice(&out.stdout).map_err(|_| bad("ffprobe output unreadable"))?;
+    let stream = json["streams"]
+        .get(0)
+        .ok_or_else(|| bad("no video stream"))?;
     let dim = |k: &str| stream[k].as_u64().filter(|v| *v > 0).map(|v| v as u32);
     let (mut width, mut height) = match (dim("width"), dim("height")) {
         (Some(w), Some(h)) => (w, h),
@@ -229,8 +262,11 @@ impl FrameReader {
         let index = self.next;
         let image = match &mut self.source {
             Source::Images(files) => {
-                let Some(path) = files.get(index) else { return Ok(None) };
-                let img = image::open(path).map_err(|e| PipelineError::input(path, format!("unreadable image ({e})")))?;
+                let Some(path) = files.get(index) else {
+                    return Ok(None);
+                };
+                let img = image::open(path)
+                    .map_err(|e| PipelineError::input(path, format!("unreadable image ({e})")))?;
                 let img = img.to_rgb8();
                 if (img.width(), img.height()) != (self.info.width, self.info.height) {
                     return Err(PipelineError::input(
@@ -249,7 +285,10 @@ impl FrameReader {
             Source::Video(child) => {
                 let len = self.info.width as usize * self.info.height as usize * 3;
                 let mut buf = vec![0u8; len];
-                let stdout = child.stdout.as_mut().ok_or_else(|| PipelineError::input(&self.info.path, "ffmpeg has no output"))?;
+                let stdout = child
+                    .stdout
+                    .as_mut()
+                    .ok_or_else(|| PipelineError::input(&self.info.path, "ffmpeg has no output"))?;
                 let mut filled = 0;
                 while filled < len {
                     match stdout.read(&mut buf[filled..]) {
@@ -263,10 +302,14 @@ impl FrameReader {
                     return self.finish_video(index);
                 }
                 if filled < len {
-                    return Err(PipelineError::input(&self.info.path, format!("frame {index} is truncated; the video is damaged")));
+                    return Err(PipelineError::input(
+                        &self.info.path,
+                        format!("frame {index} is truncated; the video is damaged"),
+                    ));
                 }
-                image::RgbImage::from_raw(self.info.width, self.info.height, buf)
-                    .ok_or_else(|| PipelineError::input(&self.info.path, "frame buffer size mismatch"))?
+                image::RgbImage::from_raw(self.info.width, self.info.height, buf).ok_or_else(
+                    || PipelineError::input(&self.info.path, "frame buffer size mismatch"),
+                )?
             }
         };
         self.next += 1;
@@ -275,18 +318,33 @@ impl FrameReader {
 
     /// At the end of ffmpeg's output: a clean end, or the decoder's error.
     fn finish_video(&mut self, index: usize) -> Result<Option<Frame>, PipelineError> {
-        let Source::Video(child) = &mut self.source else { return Ok(None) };
+        let Source::Video(child) = &mut self.source else {
+            return Ok(None);
+        };
         let mut err = String::new();
         if let Some(mut e) = child.stderr.take() {
             let _ = e.read_to_string(&mut err);
         }
-        let status = child.wait().map_err(|e| PipelineError::input(&self.info.path, e))?;
+        let status = child
+            .wait()
+            .map_err(|e| PipelineError::input(&self.info.path, e))?;
         if !status.success() || (index == 0 && !err.trim().is_empty()) {
-            let first = err.lines().find(|l| !l.trim().is_empty()).unwrap_or("ffmpeg failed").trim().to_string();
-            return Err(PipelineError::input(&self.info.path, format!("cannot decode the video: {first}")));
+            let first = err
+                .lines()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("ffmpeg failed")
+                .trim()
+                .to_string();
+            return Err(PipelineError::input(
+                &self.info.path,
+                format!("cannot decode the video: {first}"),
+            ));
         }
         if index == 0 {
-            return Err(PipelineError::input(&self.info.path, "the video has no frames"));
+            return Err(PipelineError::input(
+                &self.info.path,
+                "the video has no frames",
+            ));
         }
         Ok(None)
     }
@@ -316,7 +374,9 @@ mod tests {
         let info = InputInfo::open(dir.path()).unwrap();
         assert_eq!((info.width, info.height, info.frames), (4, 3, Some(3)));
         let mut r = info.frames().unwrap();
-        let reds: Vec<u8> = std::iter::from_fn(|| r.next_frame().unwrap()).map(|f| f.image.get_pixel(0, 0)[0]).collect();
+        let reds: Vec<u8> = std::iter::from_fn(|| r.next_frame().unwrap())
+            .map(|f| f.image.get_pixel(0, 0)[0])
+            .collect();
         assert_eq!(reds, vec![2, 1, 0]);
     }
 
@@ -325,13 +385,25 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let e = InputInfo::open(dir.path()).unwrap_err().to_string();
         assert!(e.contains("no images"), "{e}");
-        let e = InputInfo::open(&dir.path().join("nope.mp4")).unwrap_err().to_string();
+        let e = InputInfo::open(&dir.path().join("nope.mp4"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("no such file"), "{e}");
         let txt = dir.path().join("a.txt");
         std::fs::write(&txt, "x").unwrap();
-        assert!(InputInfo::open(&txt).unwrap_err().to_string().contains("unsupported"));
+        assert!(
+            InputInfo::open(&txt)
+                .unwrap_err()
+                .to_string()
+                .contains("unsupported")
+        );
         let png = dir.path().join("a.png");
         std::fs::write(&png, "not a png").unwrap();
-        assert!(InputInfo::open(&png).unwrap_err().to_string().contains("unreadable image"));
+        assert!(
+            InputInfo::open(&png)
+                .unwrap_err()
+                .to_string()
+                .contains("unreadable image")
+        );
     }
 }

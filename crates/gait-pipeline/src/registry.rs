@@ -42,8 +42,17 @@ pub fn stage_kinds(config: &PipelineConfig) -> [(&'static str, String); 3] {
         }
     };
     [
-        ("edge", kind(serde_json::to_value(&config.edge).unwrap_or_default())),
-        ("regenerator", kind(serde_json::to_value(&config.regenerator).unwrap_or_default())),
-        ("pose", kind(serde_json::to_value(&config.pose).unwrap_or_default())),
+        (
+            "edge",
+            kind(serde_json::to_value(&config.edge).unwrap_or_default()),
+        ),
+        (
+            "regenerator",
+            kind(serde_json::to_value(&config.regenerator).unwrap_or_default()),
+        ),
+        (
+            "pose",
+            kind(serde_json::to_value(&config.pose).unwrap_or_default()),
+        ),
     ]
 }

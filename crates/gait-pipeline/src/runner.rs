@@ -31,6 +31,8 @@ pub struct RunOptions {
 pub struct RunSummary {
     pub poses: PoseSequence,
     pub manifest: RunManifest,
+    /// Angles, events and cycles of the run.
+    pub kinematics: Option<gait_kin::KinResult>,
 }
 
 impl RunSummary {
@@ -38,7 +40,8 @@ impl RunSummary {
     pub fn write_manifest(&self, out: &Path) -> Result<(), PipelineError> {
         let path = out.join("run.json");
         let json = serde_json::to_vec_pretty(&self.manifest).unwrap_or_default();
-        atomic::write(&path, &json).map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))
+        atomic::write(&path, &json)
+            .map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))
     }
 }
 
@@ -50,20 +53,39 @@ struct Caches {
 
 /// Runs the pipeline on `opts.input` and writes the run folder.
 pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, PipelineError> {
-    let started_unix = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let started_unix = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
     let info = InputInfo::open(&opts.input)?;
     let fps = config.input.fps.unwrap_or(info.fps);
     let ctx = StageContext::new(&opts.models_dir);
     let mut stages = registry::build(config, &ctx)?;
-    std::fs::create_dir_all(&opts.out)
-        .map_err(|e| PipelineError::io(format!("creating the output folder {}", opts.out.display()), e))?;
+    std::fs::create_dir_all(&opts.out).map_err(|e| {
+        PipelineError::io(
+            format!("creating the output folder {}", opts.out.display()),
+            e,
+        )
+    })?;
 
     let input_key = info.fingerprint()?;
-    let edge_key = chain_key(&input_key, "edge", &config.edge);
-    let regen_key = chain_key(&edge_key, "regenerator", &config.regenerator);
-    let pose_key = chain_key(&regen_key, "pose", &config.pose);
+    // Keys cover each stage's config and the checksums of its model files,
+    // so new weights (or a rebuilt plugin at the same path) recompute.
+    let edge_models = model_records(config.edge.model_files(&ctx));
+    let regen_models = model_records(config.regenerator.model_files(&ctx));
+    let pose_models = model_records(config.pose.model_files(&ctx));
+    let edge_key = chain_key(&input_key, "edge", &(&config.edge, &edge_models));
+    let regen_key = chain_key(
+        &edge_key,
+        "regenerator",
+        &(&config.regenerator, &regen_models),
+    );
+    let pose_key = chain_key(&regen_key, "pose", &(&config.pose, &pose_models));
     let caches = if config.run.cache {
-        let root = config.run.cache_dir.clone().unwrap_or_else(|| opts.out.join("cache"));
+        let root = config
+            .run
+            .cache_dir
+            .clone()
+            .unwrap_or_else(|| opts.out.join("cache"));
         Caches {
             edge: StageCache::open(&root, "edge", &edge_key, &config.edge)?,
             regenerator: StageCache::open(&root, "regenerator", &regen_key, &config.regenerator)?,
@@ -77,7 +99,10 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         }
     };
     let mut records: BTreeMap<String, StageRecord> = BTreeMap::new();
-    for ((stage, kind), key) in registry::stage_kinds(config).into_iter().zip([&edge_key, &regen_key, &pose_key]) {
+    for ((stage, kind), key) in registry::stage_kinds(config)
+        .into_iter()
+        .zip([&edge_key, &regen_key, &pose_key])
+    {
         records.insert(
             stage.to_string(),
             StageRecord {
@@ -136,15 +161,20 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     if seq.poses.is_empty() {
         return Err(PipelineError::input(
             &opts.input,
-            format!("no frames in the selected range (first_frame = {})", config.input.first_frame),
+            format!(
+                "no frames in the selected range (first_frame = {})",
+                config.input.first_frame
+            ),
         ));
     }
     let from_cache = driver.from_cache;
 
     let csv_path = opts.out.join("keypoints.csv");
     let scorer = format!("gait-{}", records["pose"].kind.replace('/', "-"));
-    atomic::write_with(&csv_path, |w| gait_core::dlc::write(w, &scorer, &seq).map_err(std::io::Error::other))
-        .map_err(|e| PipelineError::io(format!("writing {}", csv_path.display()), e))?;
+    atomic::write_with(&csv_path, |w| {
+        gait_core::dlc::write(w, &scorer, &seq).map_err(std::io::Error::other)
+    })
+    .map_err(|e| PipelineError::io(format!("writing {}", csv_path.display()), e))?;
 
     let manifest = RunManifest {
         tool: "gait",
@@ -161,7 +191,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
             last_frame: config.input.last_frame,
         },
         config: serde_json::to_value(config).unwrap_or_default(),
-        models: model_records(registry::model_files(config, &ctx)),
+        models: [edge_models, regen_models, pose_models].concat(),
         stages: records,
         frames_processed: seq.poses.len(),
         frames_from_cache: from_cache,
@@ -169,8 +199,27 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         warnings: Vec::new(),
         extra: BTreeMap::new(),
     };
-    let summary = RunSummary { poses: seq, manifest };
+    let mut summary = RunSummary {
+        poses: seq,
+        manifest,
+        kinematics: None,
+    };
+    // Keypoints are on disk before the kinematics run, so a kinematics
+    // failure loses none of the (possibly hours of) pose work.
     summary.write_manifest(&opts.out)?;
+    let kin = gait_kin::analyse(&summary.poses, &config.postprocess, &config.kinematics)
+        .map_err(gait_core::StageError::from)?;
+    gait_kin::write_outputs(&kin, &opts.out).map_err(gait_core::StageError::from)?;
+    summary
+        .manifest
+        .warnings
+        .extend(kin.warnings.iter().cloned());
+    summary.manifest.extra.insert(
+        "kinematics".into(),
+        serde_json::to_value(&kin).unwrap_or_default(),
+    );
+    summary.write_manifest(&opts.out)?;
+    summary.kinematics = Some(kin);
     Ok(summary)
 }
 
@@ -182,8 +231,10 @@ fn progress_bar(enabled: bool, total: Option<usize>) -> ProgressBar {
         Some(n) => ProgressBar::with_draw_target(Some(n as u64), ProgressDrawTarget::stderr()),
         None => ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr()),
     };
-    let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} frames {per_sec} ETA {eta}")
-        .unwrap_or_else(|_| ProgressStyle::default_bar());
+    let style = ProgressStyle::with_template(
+        "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} frames {per_sec} ETA {eta}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar());
     bar.set_style(style);
     bar
 }
@@ -213,7 +264,12 @@ impl Driver<'_> {
         let cached = poses.iter().filter(|p| p.is_some()).count();
         self.from_cache += cached;
         self.record("pose").cached += cached;
-        let todo: Vec<&Frame> = frames.iter().zip(&poses).filter(|(_, p)| p.is_none()).map(|(f, _)| f).collect();
+        let todo: Vec<&Frame> = frames
+            .iter()
+            .zip(&poses)
+            .filter(|(_, p)| p.is_none())
+            .map(|(f, _)| f)
+            .collect();
         if !todo.is_empty() {
             let redrawn = self.regenerated(&todo)?;
             // The pose stage may track across frames: hand it contiguous runs
@@ -232,19 +288,30 @@ impl Driver<'_> {
                 let found = self.stages.pose.estimate(run)?;
                 self.record("pose").seconds += t.elapsed().as_secs_f64();
                 self.record("pose").computed += run.len();
-                if found.len() != run.len() || found.iter().any(|p| p.keypoints.len() != self.n_keypoints) {
-                    return Err(bad_output("pose", "a pose per frame with one entry per keypoint name"));
+                if found.len() != run.len()
+                    || found.iter().any(|p| p.keypoints.len() != self.n_keypoints)
+                {
+                    return Err(bad_output(
+                        "pose",
+                        "a pose per frame with one entry per keypoint name",
+                    ));
                 }
                 for (frame, pose) in run.iter().zip(found) {
                     self.caches.pose.store_pose(frame.index, &pose)?;
-                    let slot = frames.iter().position(|f| f.index == frame.index).unwrap_or(0);
+                    let slot = frames
+                        .iter()
+                        .position(|f| f.index == frame.index)
+                        .unwrap_or(0);
                     poses[slot] = Some(pose);
                 }
                 self.last_estimated = Some(run[run.len() - 1].index);
                 start = end;
             }
         }
-        Ok(poses.into_iter().map(|p| p.unwrap_or_else(|| Pose::empty(self.n_keypoints))).collect())
+        Ok(poses
+            .into_iter()
+            .map(|p| p.unwrap_or_else(|| Pose::empty(self.n_keypoints)))
+            .collect())
     }
 
     /// The frames the pose model should see: regenerated (or cached) ones.
@@ -262,25 +329,43 @@ impl Driver<'_> {
             .collect();
         let cached = out.iter().filter(|f| f.is_some()).count();
         self.record("regenerator").cached += cached;
-        let todo: Vec<Frame> = frames.iter().zip(&out).filter(|(_, o)| o.is_none()).map(|(f, _)| (*f).clone()).collect();
+        let todo: Vec<Frame> = frames
+            .iter()
+            .zip(&out)
+            .filter(|(_, o)| o.is_none())
+            .map(|(f, _)| (*f).clone())
+            .collect();
         if todo.is_empty() {
             return Ok(out.into_iter().flatten().collect());
         }
         let edges = self.edges(&todo)?;
         let t = Instant::now();
-        let redrawn = self.stages.regenerator.regenerate(&todo, edges.as_deref())?;
+        let redrawn = self
+            .stages
+            .regenerator
+            .regenerate(&todo, edges.as_deref())?;
         self.record("regenerator").seconds += t.elapsed().as_secs_f64();
         self.record("regenerator").computed += todo.len();
         if redrawn.len() != todo.len()
-            || redrawn.iter().zip(&todo).any(|(r, f)| r.index != f.index || r.image.dimensions() != f.image.dimensions())
+            || redrawn
+                .iter()
+                .zip(&todo)
+                .any(|(r, f)| r.index != f.index || r.image.dimensions() != f.image.dimensions())
         {
-            return Err(bad_output("regenerator", "one frame per input frame, with its index and size"));
+            return Err(bad_output(
+                "regenerator",
+                "one frame per input frame, with its index and size",
+            ));
         }
         let mut redrawn = redrawn.into_iter();
         for slot in out.iter_mut().filter(|o| o.is_none()) {
-            let frame = redrawn.next().ok_or_else(|| bad_output("regenerator", "one frame per input frame"))?;
+            let frame = redrawn
+                .next()
+                .ok_or_else(|| bad_output("regenerator", "one frame per input frame"))?;
             if !identity {
-                self.caches.regenerator.store_rgb(frame.index, &frame.image)?;
+                self.caches
+                    .regenerator
+                    .store_rgb(frame.index, &frame.image)?;
             }
             *slot = Some(frame);
         }
@@ -298,25 +383,43 @@ impl Driver<'_> {
                 self.caches
                     .edge
                     .load_edge(f.index)
-                    .map(|(image, resize)| EdgeMap { index: f.index, image, resize })
+                    .map(|(image, resize)| EdgeMap {
+                        index: f.index,
+                        image,
+                        resize,
+                    })
             })
             .collect();
         let cached = maps.iter().filter(|m| m.is_some()).count();
         self.record("edge").cached += cached;
-        let todo: Vec<Frame> = frames.iter().zip(&maps).filter(|(_, m)| m.is_none()).map(|(f, _)| f.clone()).collect();
+        let todo: Vec<Frame> = frames
+            .iter()
+            .zip(&maps)
+            .filter(|(_, m)| m.is_none())
+            .map(|(f, _)| f.clone())
+            .collect();
         if !todo.is_empty() {
             let t = Instant::now();
-            let detector = self.stages.edge.as_mut().ok_or_else(|| bad_output("edge", "a detector"))?;
+            let detector = self
+                .stages
+                .edge
+                .as_mut()
+                .ok_or_else(|| bad_output("edge", "a detector"))?;
             let found = detector.detect(&todo)?;
             self.record("edge").seconds += t.elapsed().as_secs_f64();
             self.record("edge").computed += todo.len();
-            if found.len() != todo.len() || found.iter().zip(&todo).any(|(m, f)| m.index != f.index) {
+            if found.len() != todo.len() || found.iter().zip(&todo).any(|(m, f)| m.index != f.index)
+            {
                 return Err(bad_output("edge", "one edge map per frame, with its index"));
             }
             let mut found = found.into_iter();
             for slot in maps.iter_mut().filter(|m| m.is_none()) {
-                let map = found.next().ok_or_else(|| bad_output("edge", "one edge map per frame"))?;
-                self.caches.edge.store_edge(map.index, &map.image, &map.resize)?;
+                let map = found
+                    .next()
+                    .ok_or_else(|| bad_output("edge", "one edge map per frame"))?;
+                self.caches
+                    .edge
+                    .store_edge(map.index, &map.image, &map.resize)?;
                 *slot = Some(map);
             }
         }

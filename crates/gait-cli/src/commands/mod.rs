@@ -1,5 +1,8 @@
 //! One module per subcommand.
 
+pub mod eval;
+pub mod kin;
+pub mod models;
 pub mod run;
 
 use std::path::PathBuf;

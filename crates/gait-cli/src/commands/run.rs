@@ -2,7 +2,7 @@ use std::path::{Path, PathBuf};
 
 use gait_pipeline::{PipelineConfig, RunOptions};
 
-use crate::error::CliError;
+use crate::error::{CliError, one_line};
 
 /// `gait run`: frames -> edges -> regenerated frames -> poses (-> kinematics).
 #[derive(Debug, clap::Args)]
@@ -34,11 +34,23 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
         command: std::env::args().collect(),
     };
     let summary = gait_pipeline::run(&config, &opts)?;
+    for w in &summary.manifest.warnings {
+        eprintln!("warning: {w}");
+    }
+    // The report reads what the run wrote, so it shows exactly the files a
+    // reader of the run folder gets.
+    let side = match config.kinematics.prosthetic_side {
+        Some(gait_kin::Side::Left) => gait_eval::Side::Left,
+        _ => gait_eval::Side::Right,
+    };
+    let report = gait_eval::Report::from_run_dir(&args.out, side)
+        .and_then(|r| r.write(&args.out))
+        .map_err(|e| CliError(format!("writing the report: {}", one_line(&e.to_string()))))?;
     eprintln!(
         "{} frames ({} from cache) -> {}",
         summary.manifest.frames_processed,
         summary.manifest.frames_from_cache,
-        args.out.join("keypoints.csv").display()
+        report.display()
     );
     Ok(())
 }

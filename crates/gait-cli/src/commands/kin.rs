@@ -1,0 +1,70 @@
+use std::path::{Path, PathBuf};
+
+use gait_pipeline::PipelineConfig;
+
+use crate::error::{CliError, one_line};
+
+/// `gait kin`: keypoints CSV -> filtered keypoints, angles, events, cycles.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Keypoints in DeepLabCut's CSV layout (e.g. a run's keypoints.csv)
+    #[arg(long, value_name = "FILE")]
+    keypoints: PathBuf,
+    /// Frame rate of the video the keypoints come from
+    #[arg(long, value_name = "N")]
+    fps: f64,
+    /// Folder for angles.csv, events.csv, cycles.csv, spatiotemporal.csv
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Pipeline config whose [postprocess] and [kinematics] tables apply [default: configs/default.toml]
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Override a config value, e.g. --set kinematics.prosthetic_side=\"right\" (repeatable)
+    #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+    sets: Vec<String>,
+    /// For multi-animal DeepLabCut files: the individual to analyse [default: the first]
+    #[arg(long, value_name = "NAME")]
+    individual: Option<String>,
+}
+
+pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
+    if !(args.fps.is_finite() && args.fps > 0.0) {
+        return Err(CliError(format!(
+            "--fps {} must be a positive frame rate",
+            args.fps
+        )));
+    }
+    let config = PipelineConfig::load(args.config.as_deref(), &args.sets)?;
+    let file = std::fs::File::open(&args.keypoints).map_err(|e| {
+        CliError(format!(
+            "{}: cannot open ({e}); check the --keypoints path",
+            args.keypoints.display()
+        ))
+    })?;
+    let seq = gait_core::dlc::read(
+        std::io::BufReader::new(file),
+        args.individual.as_deref(),
+        args.fps,
+    )
+    .map_err(|e| {
+        CliError(format!(
+            "{}: {}",
+            args.keypoints.display(),
+            one_line(&e.to_string())
+        ))
+    })?;
+    let result = gait_kin::analyse(&seq, &config.postprocess, &config.kinematics)
+        .map_err(|e| CliError(one_line(&e.to_string())))?;
+    gait_kin::write_outputs(&result, &args.out).map_err(|e| CliError(one_line(&e.to_string())))?;
+    for w in &result.warnings {
+        eprintln!("warning: {w}");
+    }
+    eprintln!(
+        "{} frames, {} events, {} strides -> {}",
+        result.n_frames,
+        result.events.len(),
+        result.strides.len(),
+        args.out.display()
+    );
+    Ok(())
+}
