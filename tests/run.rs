@@ -193,15 +193,7 @@ fn interrupted_run_resumes_where_it_stopped() {
         rows(&out.join("keypoints.csv")),
         rows(&clean.join("keypoints.csv")),
     );
-    assert_eq!(a.len(), b.len());
-    for ((fa, ca), (fb, cb)) in a.iter().zip(&b) {
-        assert_eq!(fa, fb);
-        for (x, y) in ca.iter().zip(cb) {
-            match (x.parse::<f64>(), y.parse::<f64>()) {
-                // Tracking restarts at the resume point, so a frame can differ slightly.
-                (Ok(x), Ok(y)) => assert!((x - y).abs() < 3.0, "frame {fa}: {x} vs {y}"),
-                _ => assert_eq!(x.is_empty(), y.is_empty(), "frame {fa}"),
-            }
-        }
-    }
+    // The tracker state is saved with every cached pose, so the resumed run
+    // is identical to one that was never interrupted.
+    assert_eq!(a, b);
 }

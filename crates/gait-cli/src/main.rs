@@ -28,12 +28,16 @@ struct Cli {
 enum Command {
     /// Run the pipeline on a video, an image folder or an image.
     Run(commands::run::Args),
+    /// Write the edge map of every frame as a PNG.
+    Edges(commands::edges::Args),
     /// Angles, gait events and cycles from a keypoints CSV.
     Kin(commands::kin::Args),
     /// Score predicted keypoints and angles against ground truth.
     Eval(commands::eval::Args),
     /// Obtain and list model files.
     Models(commands::models::Args),
+    /// Run every combination of stage choices over videos and compare them.
+    Ablate(commands::ablate::Args),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +46,8 @@ fn main() -> ExitCode {
     let result: Result<(), CliError> = match cli.command {
         Command::Run(args) => commands::run::execute(args, &models_dir),
         Command::Kin(args) => commands::kin::execute(args, &models_dir),
+        Command::Edges(args) => commands::edges::execute(args, &models_dir),
+        Command::Ablate(args) => commands::ablate::execute(args, &models_dir),
         Command::Eval(args) => commands::eval::execute(args, &models_dir),
         Command::Models(args) => commands::models::execute(args, &models_dir),
     };

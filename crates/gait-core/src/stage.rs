@@ -35,4 +35,18 @@ pub trait PoseEstimator: Send {
 
     /// Forgets any tracking state, e.g. before a run that resumes mid-video.
     fn reset(&mut self) {}
+
+    /// The tracking state after the last frame, for stateful estimators.
+    /// The runner saves it with each cached pose so that an interrupted run
+    /// resumes exactly as if it had not stopped. `None` means stateless.
+    fn state(&self) -> Option<Vec<u8>> {
+        None
+    }
+
+    /// Restores a state returned by [`Self::state`]; `false` when the bytes
+    /// are not understood (the runner then calls [`Self::reset`]).
+    fn restore(&mut self, state: &[u8]) -> bool {
+        let _ = state;
+        false
+    }
 }

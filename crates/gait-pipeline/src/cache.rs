@@ -139,6 +139,18 @@ impl StageCache {
         })
     }
 
+    /// A pose estimator's tracking state saved after frame `index`.
+    pub(crate) fn load_state(&self, index: usize) -> Option<Vec<u8>> {
+        std::fs::read(self.file(index, "state")?).ok()
+    }
+
+    pub(crate) fn store_state(&self, index: usize, state: &[u8]) -> Result<(), PipelineError> {
+        let Some(path) = self.file(index, "state") else {
+            return Ok(());
+        };
+        atomic::write(&path, state).map_err(|e| cache_err(&path, e))
+    }
+
     pub(crate) fn store_pose(&self, index: usize, pose: &Pose) -> Result<(), PipelineError> {
         let Some(path) = self.file(index, "json") else {
             return Ok(());

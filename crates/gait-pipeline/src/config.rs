@@ -215,7 +215,24 @@ fn from_run_json(origin: &str, text: &str) -> Result<toml::Table, PipelineError>
             "a .json config must be a run.json with a `config` field",
         )
     })?;
-    toml::Table::try_from(config).map_err(|e| PipelineError::config(origin, e))
+    toml::Table::try_from(without_nulls(config.clone()))
+        .map_err(|e| PipelineError::config(origin, e))
+}
+
+/// TOML has no null: an unset optional key (JSON `null`) is simply absent.
+fn without_nulls(value: serde_json::Value) -> serde_json::Value {
+    match value {
+        serde_json::Value::Object(map) => serde_json::Value::Object(
+            map.into_iter()
+                .filter(|(_, v)| !v.is_null())
+                .map(|(k, v)| (k, without_nulls(v)))
+                .collect(),
+        ),
+        serde_json::Value::Array(items) => {
+            serde_json::Value::Array(items.into_iter().map(without_nulls).collect())
+        }
+        other => other,
+    }
 }
 
 /// A table without `kind` gets the default table's kind, so
@@ -298,7 +315,9 @@ mod tests {
     #[test]
     fn set_overrides_and_keeps_the_kind() {
         let c = load_str("", &["pose.backend=ort", "run.batch_size=2"]).unwrap();
-        let PoseConfig::Blazepose(b) = &c.pose;
+        let PoseConfig::Blazepose(b) = &c.pose else {
+            panic!("default pose model changed: {:?}", c.pose)
+        };
         assert_eq!(b.backend, gait_core::Backend::Ort);
         assert_eq!(c.run.batch_size, 2);
     }

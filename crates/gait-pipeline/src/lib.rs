@@ -5,6 +5,7 @@
 pub mod atomic;
 mod cache;
 pub mod config;
+pub mod edges;
 mod error;
 pub mod input;
 pub mod manifest;

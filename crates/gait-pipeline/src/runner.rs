@@ -282,27 +282,49 @@ impl Driver<'_> {
                 }
                 let run = &redrawn[start..end];
                 if self.last_estimated.is_none_or(|l| l + 1 != run[0].index) {
-                    self.stages.pose.reset();
+                    // Resuming: restore the tracker as it was after the
+                    // previous frame, so results equal an uninterrupted run.
+                    let saved = run[0]
+                        .index
+                        .checked_sub(1)
+                        .and_then(|p| self.caches.pose.load_state(p));
+                    if !saved.is_some_and(|s| self.stages.pose.restore(&s)) {
+                        self.stages.pose.reset();
+                    }
                 }
-                let t = Instant::now();
-                let found = self.stages.pose.estimate(run)?;
-                self.record("pose").seconds += t.elapsed().as_secs_f64();
-                self.record("pose").computed += run.len();
-                if found.len() != run.len()
-                    || found.iter().any(|p| p.keypoints.len() != self.n_keypoints)
-                {
-                    return Err(bad_output(
-                        "pose",
-                        "a pose per frame with one entry per keypoint name",
-                    ));
-                }
-                for (frame, pose) in run.iter().zip(found) {
-                    self.caches.pose.store_pose(frame.index, &pose)?;
-                    let slot = frames
-                        .iter()
-                        .position(|f| f.index == frame.index)
-                        .unwrap_or(0);
-                    poses[slot] = Some(pose);
+                // A stateful estimator goes frame by frame so that its state
+                // after every frame can be saved with that frame's pose.
+                let step = if self.stages.pose.state().is_some() {
+                    1
+                } else {
+                    run.len()
+                };
+                for chunk in run.chunks(step) {
+                    let t = Instant::now();
+                    let found = self.stages.pose.estimate(chunk)?;
+                    self.record("pose").seconds += t.elapsed().as_secs_f64();
+                    self.record("pose").computed += chunk.len();
+                    if found.len() != chunk.len()
+                        || found.iter().any(|p| p.keypoints.len() != self.n_keypoints)
+                    {
+                        return Err(bad_output(
+                            "pose",
+                            "a pose per frame with one entry per keypoint name",
+                        ));
+                    }
+                    let state = self.stages.pose.state();
+                    for (frame, pose) in chunk.iter().zip(found) {
+                        // State first: a pose on disk always has its state beside it.
+                        if let Some(s) = &state {
+                            self.caches.pose.store_state(frame.index, s)?;
+                        }
+                        self.caches.pose.store_pose(frame.index, &pose)?;
+                        let slot = frames
+                            .iter()
+                            .position(|f| f.index == frame.index)
+                            .unwrap_or(0);
+                        poses[slot] = Some(pose);
+                    }
                 }
                 self.last_estimated = Some(run[run.len() - 1].index);
                 start = end;

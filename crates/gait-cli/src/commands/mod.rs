@@ -1,5 +1,7 @@
 //! One module per subcommand.
 
+pub mod ablate;
+pub mod edges;
 pub mod eval;
 pub mod kin;
 pub mod models;

@@ -183,4 +183,37 @@ impl PoseEstimator for Blazepose {
         self.track = None;
         self.last_centre = None;
     }
+
+    /// Little-endian f32s: presence flag + ROI (5 values), presence flag + centre (2).
+    fn state(&self) -> Option<Vec<u8>> {
+        let roi = self
+            .track
+            .map_or([0.0; 6], |r| [1.0, r.cx, r.cy, r.w, r.h, r.rotation]);
+        let centre = self.last_centre.map_or([0.0; 3], |(x, y)| [1.0, x, y]);
+        Some(
+            roi.iter()
+                .chain(&centre)
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+        )
+    }
+
+    fn restore(&mut self, state: &[u8]) -> bool {
+        if state.len() != 9 * 4 {
+            return false;
+        }
+        let v: Vec<f32> = state
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        self.track = (v[0] == 1.0).then(|| Roi {
+            cx: v[1],
+            cy: v[2],
+            w: v[3],
+            h: v[4],
+            rotation: v[5],
+        });
+        self.last_centre = (v[6] == 1.0).then_some((v[7], v[8]));
+        true
+    }
 }
