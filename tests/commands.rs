@@ -214,7 +214,8 @@ fn ablate_compares_configurations() {
             "set = [\"input.first_frame=150\", \"input.last_frame=152\"]\n[[video]]\npath = \"{}\"\n[axes]\n\"edge.kind\" = [\"none\", \"canny\"]\n\"pose.tracking\" = [true, false]\n",
             sample_video().display()
         ),
-    );
+    )
+    .unwrap();
     let out = dir.path().join("ablate");
     run_ok(
         gait()
@@ -234,8 +235,13 @@ fn ablate_compares_configurations() {
             "row without 3 frames or with an error: {r}"
         );
     }
+    // Combinations in file order, labels quoted as CSV.
     assert!(
-        rows[0].contains("edge.kind=\"\"none\"\",pose.tracking=true") || rows[0].contains("none"),
+        rows[0].starts_with("sports2d-demo,\"edge.kind=\"\"none\"\",pose.tracking=true\","),
+        "{table}"
+    );
+    assert!(
+        rows[3].starts_with("sports2d-demo,\"edge.kind=\"\"canny\"\",pose.tracking=false\","),
         "{table}"
     );
     assert!(out.join("comparison.md").is_file());

@@ -20,7 +20,7 @@ use crate::PipelineError;
 pub const DEFAULT_TOML: &str = include_str!("../../../configs/default.toml");
 
 /// Which frames of the input to use.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct InputConfig {
     /// First frame index to process (0-based).
@@ -29,16 +29,6 @@ pub struct InputConfig {
     pub last_frame: Option<usize>,
     /// Frame rate; absent = the video's own (image folders default to 30).
     pub fps: Option<f64>,
-}
-
-impl Default for InputConfig {
-    fn default() -> Self {
-        Self {
-            first_frame: 0,
-            last_frame: None,
-            fps: None,
-        }
-    }
 }
 
 /// How the runner drives the stages.

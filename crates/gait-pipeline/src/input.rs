@@ -80,7 +80,7 @@ impl InputInfo {
             ));
         }
         // Natural order, so frame_2 comes before frame_10.
-        files.sort_by(|a, b| natural_key(a).cmp(&natural_key(b)));
+        files.sort_by_key(|f| natural_key(f));
         Self::images(dir, files)
     }
 

@@ -280,13 +280,13 @@ fn write_tables(rows: &[Row], out: &Path) -> Result<(), CliError> {
             csv,
             "{},\"{}\",{},{},{:.3},{},{},\"{}\"",
             r.video,
-            r.label,
+            r.label.replace('"', "\"\""),
             r.frames,
             r.from_cache,
             r.seconds,
             cell(per_frame),
             metrics.join(","),
-            error.replace('"', "'")
+            error.replace('"', "\"\"")
         );
         let _ = writeln!(
             md,
