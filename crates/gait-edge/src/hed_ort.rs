@@ -3,32 +3,17 @@
 //! outputs `side1`..`side5`.
 
 use std::path::Path;
-use std::sync::OnceLock;
 
-use ort::environment::Environment;
+use gait_ort::Environment;
 use ort::session::Session;
 use ort::value::TensorRef;
 
 use crate::HedError;
 use crate::hed_fuse::SideOutput;
 
-/// ONNX Runtime allows one environment per process; built on first use from
-/// the library named by `ORT_DYLIB_PATH`.
+/// The process's shared ONNX Runtime environment (see `gait-ort`).
 fn environment() -> Result<Environment, HedError> {
-    static ENV: OnceLock<Result<Environment, String>> = OnceLock::new();
-    ENV.get_or_init(|| {
-        let lib = std::env::var_os("ORT_DYLIB_PATH").ok_or_else(|| {
-            "ORT_DYLIB_PATH is not set; point it at libonnxruntime.so (e.g. from the onnxruntime PyPI wheel)"
-                .to_string()
-        })?;
-        ort::init_from(&lib)
-            .map_err(|e| format!("cannot load ONNX Runtime from {}: {e}", Path::new(&lib).display()))?
-            .with_name("gait")
-            .build()
-            .map_err(|e| e.to_string())
-    })
-    .clone()
-    .map_err(HedError::Inference)
+    gait_ort::environment().map_err(HedError::Inference)
 }
 
 pub(crate) struct OrtHed {

@@ -2,10 +2,9 @@
 //! from the ONNX exports written by [`crate::blazepose::export_onnx`].
 
 use std::path::Path;
-use std::sync::Mutex;
 
 use gait_core::StageError;
-use ort::environment::Environment;
+use gait_ort::Environment;
 use ort::session::Session;
 use ort::value::Tensor;
 
@@ -34,16 +33,9 @@ impl Net for OrtNet {
     }
 }
 
-/// ONNX Runtime allows one environment per process; it lives as long as the process.
+/// The process's shared ONNX Runtime environment (see `gait-ort`).
 fn environment() -> Result<Environment, StageError> {
-    static ENV: Mutex<Option<Environment>> = Mutex::new(None);
-    let mut guard = ENV.lock().map_err(|_| err("environment lock poisoned"))?;
-    if let Some(env) = guard.as_ref() {
-        return Ok(env.clone());
-    }
-    let env = ort::init().build().map_err(err)?;
-    *guard = Some(env.clone());
-    Ok(env)
+    gait_ort::environment().map_err(err)
 }
 
 /// Opens the ONNX file next to the `.tflite` file `tflite` (parsed as `graph`).
