@@ -207,12 +207,25 @@ fn changing_only_the_pose_stage_reuses_the_edge_maps() {
 #[test]
 fn ablate_compares_configurations() {
     let dir = tempfile::tempdir().unwrap();
+    // Ground truth for the scoring columns: a plain run's own keypoints, so
+    // the configuration equal to it must score zero error.
+    let truth_run = dir.path().join("truth");
+    run_ok(
+        gait()
+            .args(["run", "--no-progress", "--models-dir"])
+            .arg(models_dir())
+            .arg("--input")
+            .arg(sample_video())
+            .args(["--set", "input.first_frame=150", "--set", "input.last_frame=152", "--out"])
+            .arg(&truth_run),
+    );
     let matrix = dir.path().join("matrix.toml");
     std::fs::write(
         &matrix,
         format!(
-            "set = [\"input.first_frame=150\", \"input.last_frame=152\"]\n[[video]]\npath = \"{}\"\n[axes]\n\"edge.kind\" = [\"none\", \"canny\"]\n\"pose.tracking\" = [true, false]\n",
-            sample_video().display()
+            "set = [\"input.first_frame=150\", \"input.last_frame=152\"]\n[[video]]\npath = \"{}\"\ntruth = \"{}\"\n[axes]\n\"edge.kind\" = [\"none\", \"canny\"]\n\"pose.tracking\" = [true, false]\n",
+            sample_video().display(),
+            truth_run.join("keypoints.csv").display()
         ),
     )
     .unwrap();
@@ -244,6 +257,9 @@ fn ablate_compares_configurations() {
         rows[3].starts_with("sports2d-demo,\"edge.kind=\"\"canny\"\",pose.tracking=false\","),
         "{table}"
     );
+    // px_err_prosthetic and px_err_intact of the configuration that made the truth.
+    let cells: Vec<&str> = rows[0].rsplitn(8, ',').collect();
+    assert_eq!((cells[5], cells[4]), ("0.000", "0.000"), "{table}");
     assert!(out.join("comparison.md").is_file());
 }
 
