@@ -216,7 +216,13 @@ fn ablate_compares_configurations() {
             .arg(models_dir())
             .arg("--input")
             .arg(sample_video())
-            .args(["--set", "input.first_frame=150", "--set", "input.last_frame=152", "--out"])
+            .args([
+                "--set",
+                "input.first_frame=150",
+                "--set",
+                "input.last_frame=152",
+                "--out",
+            ])
             .arg(&truth_run),
     );
     let matrix = dir.path().join("matrix.toml");

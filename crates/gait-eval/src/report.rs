@@ -274,7 +274,12 @@ fn collect_warnings(v: &Value, out: &mut Vec<String>) {
                 if k == "warnings"
                     && let Value::Array(items) = x
                 {
-                    out.extend(items.iter().filter_map(Value::as_str).map(str::to_string));
+                    // run.json repeats a step's warnings in its summary; list each once.
+                    for w in items.iter().filter_map(Value::as_str) {
+                        if !out.iter().any(|o| o == w) {
+                            out.push(w.to_string());
+                        }
+                    }
                 } else {
                     collect_warnings(x, out);
                 }

@@ -208,7 +208,10 @@ pub fn analyse_with(
         for coord in [&mut t.x[j], &mut t.y[j]] {
             left = steps.gap_filler.fill(coord, max_gap);
         }
-        for (start, len) in left {
+        // Gaps matter to the reader only where the kinematics use the point;
+        // a model's extra native keypoints (hands, face) are filled silently.
+        let used = gait_core::keypoint::canonical_index(&t.names[j]).is_some();
+        for (start, len) in left.into_iter().filter(|_| used) {
             warnings.push(format!(
                 "gap of {len} frames in {} (from frame {}) left empty (longer than {max_gap})",
                 t.names[j],
