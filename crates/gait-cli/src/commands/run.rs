@@ -1,36 +1,26 @@
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use gait_pipeline::{PipelineConfig, RunOptions};
+use gait_pipeline::RunOptions;
 
+use crate::commands::PipelineArgs;
 use crate::error::{CliError, one_line};
 
-/// `gait run`: frames -> edges -> regenerated frames -> poses (-> kinematics).
+/// `gait run`: frames -> edges -> regenerated frames -> poses -> kinematics,
+/// into a run folder (keypoints.csv, angles.csv, ..., report.html, run.json, cache/).
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Pipeline config (TOML), or a previous run's run.json to repeat it [default: configs/default.toml]
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
-    /// A video (mp4/avi/mov/webm/mkv), a folder of images, or one image
-    #[arg(long, value_name = "PATH")]
-    input: PathBuf,
-    /// Run folder for keypoints.csv, run.json and the cache
-    #[arg(long, value_name = "DIR")]
-    out: PathBuf,
-    /// Override a config value, e.g. --set pose.backend=ort (repeatable)
-    #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
-    sets: Vec<String>,
-    /// Do not draw a progress bar
-    #[arg(long)]
-    no_progress: bool,
+    #[command(flatten)]
+    pipeline: PipelineArgs,
 }
 
 pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
-    let config = PipelineConfig::load(args.config.as_deref(), &args.sets)?;
+    let p = args.pipeline;
+    let config = p.config()?;
     let opts = RunOptions {
-        input: args.input,
-        out: args.out.clone(),
+        input: p.input,
+        out: p.out.clone(),
         models_dir: models_dir.to_path_buf(),
-        progress: !args.no_progress,
+        progress: !p.no_progress,
         command: std::env::args().collect(),
     };
     let summary = gait_pipeline::run(&config, &opts)?;
@@ -43,8 +33,8 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
         Some(gait_kin::Side::Left) => gait_eval::Side::Left,
         _ => gait_eval::Side::Right,
     };
-    let report = gait_eval::Report::from_run_dir(&args.out, side)
-        .and_then(|r| r.write(&args.out))
+    let report = gait_eval::Report::from_run_dir(&p.out, side)
+        .and_then(|r| r.write(&p.out))
         .map_err(|e| CliError(format!("writing the report: {}", one_line(&e.to_string()))))?;
     eprintln!(
         "{} frames ({} from cache) -> {}",
