@@ -1,8 +1,6 @@
 //! Builds the configured stages. Each stage crate owns its config enum
 //! (`kind = ...`); this is the one place that knows all stage families.
 
-use std::path::PathBuf;
-
 use gait_core::{EdgeDetector, ImageRegenerator, PoseEstimator, StageContext};
 
 use crate::{PipelineConfig, PipelineError};
@@ -22,14 +20,6 @@ pub fn build(config: &PipelineConfig, ctx: &StageContext) -> Result<Stages, Pipe
         regenerator: config.regenerator.build(ctx)?,
         pose: config.pose.build(ctx)?,
     })
-}
-
-/// Every model file the configured stages read.
-pub fn model_files(config: &PipelineConfig, ctx: &StageContext) -> Vec<PathBuf> {
-    let mut files = config.edge.model_files(ctx);
-    files.extend(config.regenerator.model_files(ctx));
-    files.extend(config.pose.model_files(ctx));
-    files
 }
 
 /// A short name of each stage's choice, e.g. "canny" or "blazepose/ort".
