@@ -2,7 +2,6 @@
 //! `[pose]` table of a pipeline config by `kind`.
 
 pub mod blazepose;
-pub mod tflite;
 
 use std::path::PathBuf;
 

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use gait_core::{Backend, Frame, StageContext};
 use gait_pose::blazepose::{BlazeposeConfig, DETECTOR_FILE, LANDMARK_FILE, raw_outputs};
-use gait_pose::tflite::{Graph, TfliteError};
+use gait_tflite::{Graph, TfliteError};
 
 fn model(name: &str) -> PathBuf {
     let dir = std::env::var_os("GAIT_MODELS_DIR").expect(

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use gait_core::{Backend, StageError};
 
-use crate::tflite::{CandleGraph, Graph};
+use gait_tflite::{CandleGraph, Graph};
 
 pub const DETECTOR_FILE: &str = "pose_detection.tflite";
 pub const LANDMARK_FILE: &str = "pose_landmark_full.tflite";

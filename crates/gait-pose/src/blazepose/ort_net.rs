@@ -9,7 +9,7 @@ use ort::session::Session;
 use ort::value::Tensor;
 
 use super::net::{Net, onnx_path};
-use crate::tflite::Graph;
+use gait_tflite::Graph;
 
 fn err(e: impl ToString) -> StageError {
     StageError::backend("ort", e.to_string())

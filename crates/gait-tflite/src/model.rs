@@ -1,9 +1,9 @@
 //! The owned TFLite graph (first subgraph) and its parsing, following the
 //! field ids of TFLite's `schema.fbs`.
 
-use super::TfliteError;
-use super::densify::{DimMeta, Sparsity};
-use super::flatbuf::{Buf, Table};
+use crate::TfliteError;
+use crate::densify::{DimMeta, Sparsity};
+use crate::flatbuf::{Buf, Table};
 
 type R<T> = Result<T, TfliteError>;
 
@@ -77,6 +77,7 @@ impl Tensor {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Op {
     Add,
+    AveragePool2d,
     Concatenation,
     Conv2d,
     DepthwiseConv2d,
@@ -93,6 +94,10 @@ pub enum Op {
     Transpose,
     Densify,
     Prelu,
+    HardSwish,
+    /// A custom operator (`CUSTOM`); MediaPipe's only one in the selfie
+    /// segmentation model is `Convolution2DTransposeBias`.
+    Custom,
     Other(i32),
 }
 
@@ -100,6 +105,7 @@ impl Op {
     fn from_code(c: i32) -> Self {
         match c {
             0 => Op::Add,
+            1 => Op::AveragePool2d,
             2 => Op::Concatenation,
             3 => Op::Conv2d,
             4 => Op::DepthwiseConv2d,
@@ -111,10 +117,12 @@ impl Op {
             19 => Op::Relu,
             21 => Op::Relu6,
             22 => Op::Reshape,
+            32 => Op::Custom,
             23 => Op::ResizeBilinear,
             34 => Op::Pad,
             39 => Op::Transpose,
             54 => Op::Prelu,
+            117 => Op::HardSwish,
             124 => Op::Densify,
             o => Op::Other(o),
         }
@@ -255,7 +263,7 @@ fn options(op: Op, t: Option<Table>) -> R<OpOptions> {
                 positive(t.i32_or(5, 1)?, "dilation")?,
             ),
         },
-        Op::MaxPool2d => OpOptions::Pool {
+        Op::MaxPool2d | Op::AveragePool2d => OpOptions::Pool {
             padding: padding(t.u8_or(0, 0)?),
             stride: stride(1, 2)?,
             filter: (

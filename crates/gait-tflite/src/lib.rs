@@ -1,6 +1,7 @@
 //! Reading TensorFlow Lite model files (`.tflite` flatbuffers) into an owned
 //! graph: tensors with their constant data (float32, float16, int32, sparse
-//! tensors densified) and operators with their builtin options.
+//! tensors densified) and operators with their builtin options. Shared by the stages that run
+//! MediaPipe models (BlazePose, selfie segmentation).
 
 mod candle;
 mod densify;

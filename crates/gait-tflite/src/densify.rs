@@ -1,6 +1,6 @@
 //! TFLite's sparse tensor format (`SparsityParameters`) back to dense order.
 
-use super::TfliteError;
+use crate::TfliteError;
 
 /// Storage of one dimension, in traversal order.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,6 +1,6 @@
 //! TFLite's output sizes and padding (SAME puts the odd padding pixel after).
 
-use super::Padding;
+use crate::Padding;
 
 /// (output size, padding before) along one axis.
 pub(crate) fn axis(

@@ -4,9 +4,9 @@
 
 use candle_core::{Device, Tensor};
 
-use super::depthwise::Depthwise;
-use super::model::{Activation, Graph, Op, OpOptions};
-use super::same::{self, nchw_axis};
+use crate::depthwise::Depthwise;
+use crate::model::{Activation, Graph, Op, OpOptions};
+use crate::same::{self, nchw_axis};
 
 type R<T> = Result<T, String>;
 
@@ -43,6 +43,19 @@ enum Step {
         rxt: Tensor,
     },
     DepthToSpace(usize),
+    /// VALID average pooling (the selfie model's global pools).
+    AvgPool {
+        k: (usize, usize),
+        stride: (usize, usize),
+    },
+    /// MediaPipe's `Convolution2DTransposeBias` where kernel == stride (no
+    /// overlap): a 1x1 conv to `block^2 * o` channels, then depth-to-space.
+    TransposeConv {
+        w: Tensor,
+        b: Tensor,
+        block: usize,
+    },
+    HardSwish,
     Logistic,
     Relu,
     Relu6,
@@ -280,6 +293,64 @@ impl CandleGraph {
                     Step::Resize { ry, rxt }
                 }
                 (Op::DepthToSpace, OpOptions::DepthToSpace { block }) => Step::DepthToSpace(*block),
+                (
+                    Op::AveragePool2d,
+                    OpOptions::Pool {
+                        stride,
+                        filter,
+                        activation,
+                        ..
+                    },
+                ) => {
+                    act = *activation;
+                    let (xs, os) = (shape(input(0)?), shape(out));
+                    // Only unpadded pools: TFLite's SAME average excludes the
+                    // padding from the count, which candle cannot express.
+                    if (os[1] - 1) * stride.0 + filter.0 != xs[1]
+                        || (os[2] - 1) * stride.1 + filter.1 != xs[2]
+                    {
+                        return Err(format!("operator {k}: padded average pool"));
+                    }
+                    Step::AvgPool {
+                        k: *filter,
+                        stride: *stride,
+                    }
+                }
+                (Op::Custom, _) => {
+                    // Inputs: activations, weights [o, kh, kw, i], bias [o].
+                    let (xs, ws, os) = (shape(input(0)?), shape(input(1)?), shape(out));
+                    let [o, kh, kw, i] = ws[..] else {
+                        return Err(format!("operator {k}: custom op weights {ws:?}"));
+                    };
+                    if kh != kw || os[1] != xs[1] * kh || os[2] != xs[2] * kw || xs[3] != i {
+                        return Err(format!(
+                            "operator {k}: custom op {xs:?} x {ws:?} -> {os:?} is not a \
+                             non-overlapping transposed convolution"
+                        ));
+                    }
+                    let wv = konst(input(1)?)?;
+                    // Rows ordered (dy, dx, o), the channel order depth-to-space reads.
+                    let mut m = vec![0f32; kh * kw * o * i];
+                    for oc in 0..o {
+                        for dy in 0..kh {
+                            for dx in 0..kw {
+                                let row = (dy * kw + dx) * o + oc;
+                                let src = ((oc * kh + dy) * kw + dx) * i;
+                                m[row * i..(row + 1) * i].copy_from_slice(&wv[src..src + i]);
+                            }
+                        }
+                    }
+                    let b = match ins.get(2) {
+                        Some(&bi) => konst(bi)?,
+                        None => vec![0.0; o],
+                    };
+                    Step::TransposeConv {
+                        w: Tensor::from_vec(m, (kh * kw * o, i), &dev).map_err(ce)?,
+                        b: Tensor::from_vec(b, (1, o, 1, 1), &dev).map_err(ce)?,
+                        block: kh,
+                    }
+                }
+                (Op::HardSwish, _) => Step::HardSwish,
                 (Op::Logistic, _) => Step::Logistic,
                 (Op::Relu, _) => Step::Relu,
                 (Op::Relu6, _) => Step::Relu6,
@@ -423,6 +494,21 @@ impl CandleGraph {
                     .and_then(|t| t.permute((0, 3, 4, 1, 5, 2)))
                     .and_then(|t| t.reshape((n, co, h * b, w * b)))
             }
+            Step::AvgPool { k, stride } => x.avg_pool2d_with_stride(*k, *stride),
+            Step::TransposeConv { w, b, block } => {
+                let (n, c, h, wd) = x.dims4().map_err(ce)?;
+                let y = w.matmul(&x.reshape((c, h * wd)).map_err(ce)?).map_err(ce)?;
+                let co = w.dim(0).map_err(ce)? / (block * block);
+                y.reshape((n, *block, *block, co, h, wd))
+                    .and_then(|t| t.permute((0, 3, 4, 1, 5, 2)))
+                    .and_then(|t| t.reshape((n, co, h * block, wd * block)))
+                    .and_then(|t| t.broadcast_add(b))
+            }
+            // x * relu6(x + 3) / 6
+            Step::HardSwish => (x + 3.0)
+                .and_then(|t| t.clamp(0f32, 6f32))
+                .and_then(|t| t * (1.0 / 6.0))
+                .and_then(|t| t.mul(x)),
             Step::Logistic => x
                 .neg()
                 .and_then(|t| t.exp())

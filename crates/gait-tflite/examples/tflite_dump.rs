@@ -1,6 +1,6 @@
-//! Prints the operators of a `.tflite` file: `cargo run --example tflite_dump -- FILE`.
+//! Prints the operators of a `.tflite` file: `cargo run -p gait-tflite --example tflite_dump -- FILE`.
 
-use gait_pose::tflite::Graph;
+use gait_tflite::Graph;
 
 fn main() {
     let Some(path) = std::env::args().nth(1) else {

@@ -2,8 +2,8 @@
 //! by hand. Activations are NCHW inside; the input is taken NHWC and 4-D
 //! outputs are given back NHWC, like the TFLite model.
 
-use super::model::{Activation, Graph, Op, OpOptions};
-use super::same::{self, nchw_axis};
+use crate::model::{Activation, Graph, Op, OpOptions};
+use crate::same::{self, nchw_axis};
 
 /// Protobuf writer: fields are appended as (tag, payload).
 #[derive(Default)]

@@ -1,7 +1,7 @@
 //! A minimal, bounds-checked FlatBuffers reader: just what the TFLite schema
 //! needs (tables, scalars, strings, vectors of scalars and of tables).
 
-use super::TfliteError;
+use crate::TfliteError;
 
 type R<T> = Result<T, TfliteError>;
 
