@@ -2,6 +2,7 @@
 
 mod commands;
 mod error;
+mod hub;
 
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -1,6 +1,7 @@
 use std::path::Path;
 
 use crate::error::{CliError, one_line};
+use crate::hub;
 
 /// `gait models`: obtain and list model files.
 #[derive(Debug, clap::Args)]
@@ -13,27 +14,95 @@ pub struct Args {
 enum Action {
     /// Download a model into the models folder (checksums verified)
     Fetch {
-        /// Which model: blazepose
+        /// Which model: blazepose, hed, sd15-controlnet-canny
         name: String,
+        /// Hugging Face repository to download from [default: the model's usual one; for
+        /// sd15-controlnet-canny the Stable Diffusion 1.5 repository]
+        #[arg(long, value_name = "ID")]
+        repo: Option<String>,
+        /// Branch, tag or commit of --repo
+        #[arg(long, value_name = "REV", default_value = "main")]
+        revision: String,
+        /// sd15-controlnet-canny only: the ControlNet repository [default: lllyasviel/sd-controlnet-canny]
+        #[arg(long, value_name = "ID")]
+        controlnet_repo: Option<String>,
+        /// sd15-controlnet-canny only: branch, tag or commit of --controlnet-repo
+        #[arg(long, value_name = "REV", default_value = "main")]
+        controlnet_revision: String,
     },
     /// List the models the toolkit knows and whether their files are present
     List,
 }
 
-const MODELS: [(&str, &str); 1] = [(
-    "blazepose",
-    "MediaPipe BlazePose full (from the PyPI wheel mediapipe==0.10.14)",
-)];
+const MODELS: [(&str, &str); 3] = [
+    (
+        "blazepose",
+        "MediaPipe BlazePose full (from the PyPI wheel mediapipe==0.10.14)",
+    ),
+    (
+        "hed",
+        "HED edge detector, ControlNetHED.pth (Hugging Face lllyasviel/Annotators)",
+    ),
+    (
+        "sd15-controlnet-canny",
+        "Stable Diffusion 1.5 + canny ControlNet, diffusers layout (Hugging Face)",
+    ),
+];
 
 pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     match args.action {
-        Action::Fetch { name } => fetch(&name, models_dir),
+        Action::Fetch {
+            name,
+            repo,
+            revision,
+            controlnet_repo,
+            controlnet_revision,
+        } => {
+            let files = match hub::defaults(&name, models_dir) {
+                Some(mut repos) => {
+                    if let Some(id) = repo {
+                        repos[0].id = id;
+                    }
+                    repos[0].revision = revision;
+                    match repos.get_mut(1) {
+                        Some(cn) => {
+                            if let Some(id) = controlnet_repo {
+                                cn.id = id;
+                            }
+                            cn.revision = controlnet_revision;
+                        }
+                        None if controlnet_repo.is_some() || controlnet_revision != "main" => {
+                            return Err(CliError(format!(
+                                "--controlnet-repo/--controlnet-revision apply to sd15-controlnet-canny only, not `{name}`"
+                            )));
+                        }
+                        None => {}
+                    }
+                    hub::fetch(&repos, models_dir)
+                        .map_err(|e| CliError(one_line(&e.to_string())))?
+                }
+                None if repo.is_some()
+                    || controlnet_repo.is_some()
+                    || revision != "main"
+                    || controlnet_revision != "main" =>
+                {
+                    return Err(CliError(format!(
+                        "`{name}` does not come from the Hugging Face Hub: --repo, --revision and the --controlnet-* options do not apply"
+                    )));
+                }
+                None => fetch_other(&name, models_dir)?,
+            };
+            for f in files {
+                eprintln!("{}", f.display());
+            }
+            Ok(())
+        }
         Action::List => {
             println!("models folder: {}", models_dir.display());
             for (name, about) in MODELS {
                 let present = present(name, models_dir);
                 println!(
-                    "{name:<12} {} {about}",
+                    "{name:<22} {} {about}",
                     if present { "present" } else { "missing" }
                 );
             }
@@ -43,6 +112,12 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
 }
 
 fn present(name: &str, models_dir: &Path) -> bool {
+    if let Some(repos) = hub::defaults(name, models_dir) {
+        return repos
+            .iter()
+            .flat_map(|r| &r.files)
+            .all(|(_, dest)| dest.is_file());
+    }
     let ctx = gait_core::StageContext::new(models_dir);
     match name {
         "blazepose" => gait_pose::blazepose::BlazeposeConfig::default()
@@ -53,20 +128,16 @@ fn present(name: &str, models_dir: &Path) -> bool {
     }
 }
 
-fn fetch(name: &str, models_dir: &Path) -> Result<(), CliError> {
-    let files = match name {
+fn fetch_other(name: &str, models_dir: &Path) -> Result<Vec<std::path::PathBuf>, CliError> {
+    match name {
         "blazepose" => gait_pose::blazepose::fetch::fetch(models_dir)
-            .map_err(|e| CliError(one_line(&e.to_string())))?,
+            .map_err(|e| CliError(one_line(&e.to_string()))),
         other => {
             let known: Vec<&str> = MODELS.iter().map(|(n, _)| *n).collect();
-            return Err(CliError(format!(
+            Err(CliError(format!(
                 "unknown model `{other}`; known models: {}",
                 known.join(", ")
-            )));
+            )))
         }
-    };
-    for f in files {
-        eprintln!("{}", f.display());
     }
-    Ok(())
 }
