@@ -1,13 +1,16 @@
 //! The `kind = "canny"` edge stage: ControlNet's canny annotator.
 
-use gait_core::{EdgeDetector, EdgeMap, Frame, StageError};
+use std::path::PathBuf;
+
+use gait_core::{EdgeDetector, EdgeMap, Frame, StageContext, StageError};
 use serde::{Deserialize, Serialize};
 
 use crate::canny::{Canny, CannyParams};
+use crate::person_mask::{MaskKind, MaskSettings, PersonMask};
 use crate::working_size::{DEFAULT_RESOLUTION, to_working_size};
 
 /// `[edge] kind = "canny"`: thresholds, gradient norm and working size.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CannyConfig {
     /// Weak-edge threshold (annotator default 100).
@@ -19,6 +22,16 @@ pub struct CannyConfig {
     /// Short side of the working image (sides rounded to multiples of 64);
     /// 0 = the frame's own size.
     pub resolution: u32,
+    /// Person mask: `"none"` (default) or `"selfie"` (MediaPipe selfie
+    /// segmentation; edges outside the person are removed).
+    pub mask: MaskKind,
+    /// Person probability threshold of the mask.
+    pub mask_threshold: f32,
+    /// Pixels the mask is dilated by (at the working size).
+    pub mask_dilate: u32,
+    /// Mask model, relative to the models folder unless absolute (default
+    /// `blazepose/selfie_segmentation.tflite`).
+    pub mask_model: Option<PathBuf>,
 }
 
 impl Default for CannyConfig {
@@ -29,6 +42,10 @@ impl Default for CannyConfig {
             high: p.high,
             l2_gradient: p.l2_gradient,
             resolution: DEFAULT_RESOLUTION,
+            mask: MaskKind::None,
+            mask_threshold: 0.5,
+            mask_dilate: 8,
+            mask_model: None,
         }
     }
 }
@@ -39,6 +56,16 @@ impl CannyConfig {
             low: self.low,
             high: self.high,
             l2_gradient: self.l2_gradient,
+        }
+    }
+
+    /// The person-mask keys of this config.
+    pub fn mask_settings(&self) -> MaskSettings {
+        MaskSettings {
+            kind: self.mask,
+            threshold: self.mask_threshold,
+            dilate: self.mask_dilate,
+            model: self.mask_model.clone(),
         }
     }
 
@@ -54,10 +81,10 @@ impl CannyConfig {
 }
 
 /// Resizes each frame to the working size and runs [`Canny`] on its RGB pixels.
-#[derive(Debug)]
 pub struct CannyDetector {
     canny: Canny,
     resolution: u32,
+    mask: Option<PersonMask>,
 }
 
 impl CannyDetector {
@@ -65,7 +92,15 @@ impl CannyDetector {
         Self {
             canny: Canny::new(config.params()),
             resolution: config.resolution,
+            mask: None,
         }
+    }
+
+    /// As [`CannyDetector::new`], with the person mask the config asks for.
+    pub fn build(config: &CannyConfig, ctx: &StageContext) -> Result<Self, StageError> {
+        let mut d = Self::new(config);
+        d.mask = config.mask_settings().build(ctx)?;
+        Ok(d)
     }
 }
 
@@ -83,9 +118,13 @@ impl EdgeDetector for CannyDetector {
                     )));
                 }
                 let (image, resize) = to_working_size(frame, self.resolution);
+                let mut edges = self.canny.rgb(&image);
+                if let Some(mask) = &self.mask {
+                    mask.apply(&image, &mut edges)?;
+                }
                 Ok(EdgeMap {
                     index: frame.index,
-                    image: self.canny.rgb(&image),
+                    image: edges,
                     resize,
                 })
             })

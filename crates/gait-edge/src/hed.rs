@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::hed_candle::CandleHed;
 use crate::hed_fuse::{SideOutput, fuse};
 use crate::hed_ort::OrtHed;
+use crate::person_mask::{MaskKind, MaskSettings, PersonMask};
 use crate::working_size::{DEFAULT_RESOLUTION, to_working_size};
 
 /// How to obtain the weights; part of every missing-file message.
@@ -34,6 +35,16 @@ pub struct HedConfig {
     /// Short side of the working image (sides rounded to multiples of 64);
     /// 0 = the frame's own size.
     pub resolution: u32,
+    /// Person mask: `"none"` (default) or `"selfie"` (MediaPipe selfie
+    /// segmentation; edges outside the person are removed).
+    pub mask: MaskKind,
+    /// Person probability threshold of the mask.
+    pub mask_threshold: f32,
+    /// Pixels the mask is dilated by (at the working size).
+    pub mask_dilate: u32,
+    /// Mask model, relative to the models folder unless absolute (default
+    /// `blazepose/selfie_segmentation.tflite`).
+    pub mask_model: Option<PathBuf>,
 }
 
 impl Default for HedConfig {
@@ -44,6 +55,10 @@ impl Default for HedConfig {
             safe: false,
             safe_steps: 2,
             resolution: DEFAULT_RESOLUTION,
+            mask: MaskKind::None,
+            mask_threshold: 0.5,
+            mask_dilate: 8,
+            mask_model: None,
         }
     }
 }
@@ -58,6 +73,16 @@ impl HedConfig {
         ctx.model_path(self.weights.as_deref().unwrap_or(Path::new(default)))
     }
 
+    /// The person-mask keys of this config.
+    pub fn mask_settings(&self) -> MaskSettings {
+        MaskSettings {
+            kind: self.mask,
+            threshold: self.mask_threshold,
+            dilate: self.mask_dilate,
+            model: self.mask_model.clone(),
+        }
+    }
+
     pub fn build(&self, ctx: &StageContext) -> Result<HedDetector, StageError> {
         if self.safe && self.safe_steps == 0 {
             return Err(StageError::BadInput("edge.safe_steps must be >= 1".into()));
@@ -70,6 +95,7 @@ impl HedConfig {
             backend: self.backend,
             safe_steps: self.safe.then_some(self.safe_steps),
             resolution: self.resolution,
+            mask: self.mask_settings().build(ctx)?,
         })
     }
 }
@@ -152,6 +178,7 @@ pub struct HedDetector {
     backend: Backend,
     safe_steps: Option<u32>,
     resolution: u32,
+    mask: Option<PersonMask>,
 }
 
 impl HedDetector {
@@ -179,9 +206,12 @@ impl EdgeDetector for HedDetector {
                     )));
                 }
                 let (image, resize) = to_working_size(frame, self.resolution);
-                let edges = self
+                let mut edges = self
                     .edges_of(&image)
                     .map_err(|e| StageError::backend(self.backend.to_string(), e))?;
+                if let Some(mask) = &self.mask {
+                    mask.apply(&image, &mut edges)?;
+                }
                 Ok(EdgeMap {
                     index: frame.index,
                     image: edges,

@@ -8,6 +8,7 @@ mod hed_candle;
 mod hed_fuse;
 mod hed_net;
 mod hed_ort;
+mod person_mask;
 mod resample;
 mod working_size;
 
@@ -20,6 +21,7 @@ pub use canny::{Canny, CannyParams, edge_f1};
 pub use canny_detector::{CannyConfig, CannyDetector};
 pub use hed::{CandleHedNet, HedConfig, HedDetector, HedError, HedNetwork, OrtHedNet};
 pub use hed_fuse::{SideOutput, fuse};
+pub use person_mask::{MaskKind, MaskSettings, PersonMask, SELFIE_MODEL};
 pub use resample::resize_for_annotator;
 pub use working_size::{DEFAULT_RESOLUTION, to_working_size, working_resize};
 
@@ -44,7 +46,7 @@ impl EdgeConfig {
             EdgeConfig::None => Ok(None),
             EdgeConfig::Canny(c) => {
                 c.validate()?;
-                Ok(Some(Box::new(CannyDetector::new(c))))
+                Ok(Some(Box::new(CannyDetector::build(c, ctx)?)))
             }
             EdgeConfig::Hed(c) => Ok(Some(Box::new(c.build(ctx)?))),
             EdgeConfig::Plugin(p) => Ok(Some(gait_plugin::load_edge_detector(p, ctx)?)),
@@ -54,8 +56,11 @@ impl EdgeConfig {
     /// Model files the detector reads (checksummed into `run.json`).
     pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
         match self {
-            EdgeConfig::None | EdgeConfig::Canny(_) => Vec::new(),
-            EdgeConfig::Hed(c) => vec![c.weights_path(ctx)],
+            EdgeConfig::None => Vec::new(),
+            EdgeConfig::Canny(c) => c.mask_settings().model_path(ctx).into_iter().collect(),
+            EdgeConfig::Hed(c) => std::iter::once(c.weights_path(ctx))
+                .chain(c.mask_settings().model_path(ctx))
+                .collect(),
             EdgeConfig::Plugin(p) => vec![p.resolved_path()],
         }
     }
