@@ -4,8 +4,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source tools/setup.sh
-cargo build --release -p gait-cli
-target/release/gait models fetch blazepose
-target/release/gait run --input data/sample/sports2d-demo.mp4 --out runs/sample \
+# The dev profile builds dependencies and our numeric crates at opt-level 3
+# (Cargo.toml), so it is fast and shares its build with tools/test.sh.
+cargo build -p gait-cli
+target/debug/gait models fetch blazepose
+target/debug/gait run --input data/sample/sports2d-demo.mp4 --out runs/sample \
   --set input.first_frame=100 "$@"
 echo "results in runs/sample (keypoints.csv, angles.csv, cycles.csv, report.html, run.json)"
