@@ -13,6 +13,7 @@ mod error;
 mod frame;
 pub mod geometry;
 pub mod keypoint;
+pub mod openpose_layout;
 mod pose;
 mod stage;
 

@@ -2,6 +2,7 @@
 //! `[pose]` table of a pipeline config by `kind`.
 
 pub mod blazepose;
+pub mod openpose;
 
 use std::path::PathBuf;
 

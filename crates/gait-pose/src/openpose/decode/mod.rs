@@ -1,0 +1,1 @@
+//! Turning heatmaps and part-affinity fields into people.

@@ -1,0 +1,1 @@
+//! The OpenPose networks: COCO-18 body model on candle (from `body_pose_model.pth`) and ONNX exports on ort.
