@@ -53,32 +53,38 @@ impl CustomOp1 for Depthwise {
         let (dy, dx) = self.dilation;
         let (py, px) = (self.pad.0 as isize, self.pad.1 as isize);
         let mut out = vec![0f32; oc * oh * ow];
+        // Per kernel column: the output columns whose input lies inside the image.
+        let cols: Vec<(usize, usize, isize)> = (0..kw)
+            .map(|kx| {
+                let off_x = (kx * dx) as isize - px;
+                let lo = if off_x < 0 {
+                    ((-off_x) as usize).div_ceil(sx)
+                } else {
+                    0
+                };
+                let hi = if (w as isize) > off_x {
+                    ((w as isize - off_x - 1) as usize / sx + 1).min(ow)
+                } else {
+                    0
+                };
+                (lo, hi.max(lo), off_x)
+            })
+            .collect();
         for o in 0..oc {
             let plane = &x[(o / self.multiplier) * h * w..][..h * w];
             let dst = &mut out[o * oh * ow..][..oh * ow];
-            dst.fill(self.bias[o]);
-            for ky in 0..kh {
-                for kx in 0..kw {
-                    let wv = self.weights[(o * kh + ky) * kw + kx];
-                    let off_x = (kx * dx) as isize - px;
-                    // Output columns whose input column lies inside the image.
-                    let lo = if off_x < 0 {
-                        ((-off_x) as usize).div_ceil(sx)
-                    } else {
-                        0
-                    };
-                    let hi = if (w as isize) > off_x {
-                        ((w as isize - off_x - 1) as usize / sx + 1).min(ow)
-                    } else {
-                        0
-                    };
-                    for oy in 0..oh {
-                        let iy = (oy * sy + ky * dy) as isize - py;
-                        if iy < 0 || iy >= h as isize {
-                            continue;
-                        }
-                        let src = &plane[iy as usize * w..][..w];
-                        let row = &mut dst[oy * ow..][..ow];
+            let taps = &self.weights[o * kh * kw..][..kh * kw];
+            // One output row at a time, all taps while it sits in L1.
+            for (oy, row) in dst.chunks_exact_mut(ow).enumerate() {
+                row.fill(self.bias[o]);
+                for ky in 0..kh {
+                    let iy = (oy * sy + ky * dy) as isize - py;
+                    if iy < 0 || iy >= h as isize {
+                        continue;
+                    }
+                    let src = &plane[iy as usize * w..][..w];
+                    for (kx, &(lo, hi, off_x)) in cols.iter().enumerate() {
+                        let wv = taps[ky * kw + kx];
                         if sx == 1 {
                             let s0 = (lo as isize + off_x) as usize;
                             for (d, s) in row[lo..hi].iter_mut().zip(&src[s0..]) {

@@ -462,6 +462,33 @@ impl Graph {
             std::fs::read(path).map_err(|e| TfliteError::Malformed(format!("cannot read: {e}")))?;
         Self::parse(&bytes)
     }
+
+    /// Keeps only the graph outputs chosen by `keep` (given each output's
+    /// tensor) and drops the operators that feed none of them, so neither
+    /// backend computes results nobody reads (e.g. BlazePose's segmentation).
+    pub fn keep_outputs(&mut self, keep: impl Fn(&Tensor) -> bool) {
+        self.outputs.retain(|&o| keep(&self.tensors[o]));
+        let mut needed = vec![false; self.tensors.len()];
+        for &o in &self.outputs {
+            needed[o] = true;
+        }
+        // Operators are stored in execution order, so one backward pass finds
+        // everything the kept outputs depend on.
+        let mut live = vec![false; self.operators.len()];
+        for (k, op) in self.operators.iter().enumerate().rev() {
+            if op.outputs.iter().any(|&t| t >= 0 && needed[t as usize]) {
+                live[k] = true;
+                for &t in op.inputs.iter().filter(|&&t| t >= 0) {
+                    needed[t as usize] = true;
+                }
+            }
+        }
+        let mut k = 0;
+        self.operators.retain(|_| {
+            k += 1;
+            live[k - 1]
+        });
+    }
 }
 
 /// Bytes of a `Buffer`: inline data, or (large models) an offset into the file.
@@ -478,4 +505,48 @@ fn buffer_bytes(file: &[u8], b: &Table) -> R<Option<Vec<u8>>> {
         return Ok(Some(d.to_vec()));
     }
     Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tensor(name: &str, len: usize) -> Tensor {
+        Tensor {
+            name: name.into(),
+            shape: vec![1, len],
+            dtype: DType::F32,
+            data: None,
+        }
+    }
+
+    fn relu(from: i32, to: i32) -> Operator {
+        Operator {
+            op: Op::Relu,
+            inputs: vec![from],
+            outputs: vec![to],
+            options: OpOptions::None,
+        }
+    }
+
+    #[test]
+    fn keep_outputs_drops_dead_branches() {
+        // in(0) -> a(1) -> out_a(2) and in(0) -> b(3) -> out_b(4).
+        let mut g = Graph {
+            tensors: vec![
+                tensor("in", 1),
+                tensor("a", 1),
+                tensor("out_a", 2),
+                tensor("b", 1),
+                tensor("out_b", 3),
+            ],
+            operators: vec![relu(0, 1), relu(0, 3), relu(1, 2), relu(3, 4)],
+            inputs: vec![0],
+            outputs: vec![2, 4],
+        };
+        g.keep_outputs(|t| t.name == "out_a");
+        assert_eq!(g.outputs, vec![2]);
+        let outs: Vec<i32> = g.operators.iter().map(|o| o.outputs[0]).collect();
+        assert_eq!(outs, vec![1, 2]);
+    }
 }

@@ -96,7 +96,7 @@ pub fn export_onnx(dir: &Path) -> Result<Vec<PathBuf>, FetchError> {
             path: src.clone(),
             reason,
         };
-        let graph = gait_tflite::Graph::load(&src).map_err(|e| fail(e.to_string()))?;
+        let graph = super::net::load_graph(&src).map_err(|e| fail(e.to_string()))?;
         let bytes = gait_tflite::to_onnx(&graph).map_err(fail)?;
         let dst = super::net::onnx_path(&src);
         std::fs::write(&dst, bytes).map_err(io(format!("writing {}", dst.display())))?;

@@ -38,7 +38,7 @@ pub(crate) fn load(path: &Path, backend: Backend) -> Result<Box<dyn Net>, StageE
     if !path.is_file() {
         return Err(missing(path));
     }
-    let graph = Graph::load(path).map_err(|e| StageError::bad_model(path, e))?;
+    let graph = load_graph(path).map_err(|e| StageError::bad_model(path, e))?;
     match backend {
         Backend::Candle => {
             let graph = CandleGraph::new(&graph).map_err(|e| StageError::bad_model(path, e))?;
@@ -46,6 +46,18 @@ pub(crate) fn load(path: &Path, backend: Backend) -> Result<Box<dyn Net>, StageE
         }
         Backend::Ort => super::ort_net::load(path, &graph),
     }
+}
+
+/// Element counts of the landmark model's outputs that the estimator never
+/// reads: the 256x256 segmentation mask and the 33 world landmarks. Dropping
+/// them halves the landmark model's work on both backends.
+const UNUSED_OUTPUTS: [usize; 2] = [256 * 256, 39 * 3];
+
+/// Parses a `.tflite` file, keeping only the outputs the estimator reads.
+pub(crate) fn load_graph(path: &Path) -> Result<Graph, gait_tflite::TfliteError> {
+    let mut graph = Graph::load(path)?;
+    graph.keep_outputs(|t| !UNUSED_OUTPUTS.contains(&t.shape.iter().product()));
+    Ok(graph)
 }
 
 /// Path of the ONNX export next to a `.tflite` file.
