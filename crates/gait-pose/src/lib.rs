@@ -3,6 +3,9 @@
 
 pub mod blazepose;
 pub mod openpose;
+mod person;
+
+pub use person::PersonChoice;
 
 use std::path::PathBuf;
 

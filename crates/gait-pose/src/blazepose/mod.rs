@@ -18,6 +18,7 @@ use std::path::PathBuf;
 use gait_core::{Backend, PoseEstimator, StageContext, StageError};
 use serde::{Deserialize, Serialize};
 
+pub use crate::person::PersonChoice;
 pub use estimator::Blazepose;
 pub use names::NATIVE;
 pub use net::{DETECTOR_FILE, LANDMARK_FILE};
@@ -31,22 +32,6 @@ pub fn raw_outputs(
     input: &[f32],
 ) -> Result<Vec<Vec<f32>>, StageError> {
     net::load(model, backend)?.run(input)
-}
-
-/// Which person to follow when several are in view. The choice is made when a
-/// person is (re-)detected; tracking then keeps to the same person.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PersonChoice {
-    /// The biggest body (usually the one nearest the camera).
-    #[default]
-    Largest,
-    Leftmost,
-    Rightmost,
-    /// Nearest the image centre.
-    MostCentral,
-    /// The detector's best score (what mediapipe itself does).
-    MostConfident,
 }
 
 /// Keys of `[pose]` when `kind = "blazepose"`.

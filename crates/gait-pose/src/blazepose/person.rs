@@ -1,13 +1,13 @@
-//! Which detected person to follow.
+//! Which detected person to follow (see [`crate::person`]).
 
 use super::PersonChoice;
 use super::detection::Detection;
 use super::roi::Roi;
+use crate::person::{self as choice, Candidate};
 
 /// The crop of the chosen person among `dets` (best score first) in a
-/// `width` x `height` image. With `last` (the centre of the person followed
-/// until now, normalised), the detection nearest to it wins if it lies within
-/// one crop side, so re-detection keeps to the same person.
+/// `width` x `height` image. `last` is the centre of the person followed until
+/// now (normalised); a detection within one crop side of it wins.
 pub fn choose(
     dets: &[Detection],
     person: PersonChoice,
@@ -15,31 +15,24 @@ pub fn choose(
     width: u32,
     height: u32,
 ) -> Option<Roi> {
+    let (wf, hf) = (width as f32, height as f32);
     let rois: Vec<Roi> = dets
         .iter()
         .map(|d| Roi::from_alignment(d.keypoints[0], d.keypoints[1], width, height))
         .collect();
-    let (wf, hf) = (width as f32, height as f32);
-    let dist = |r: &Roi, (x, y): (f32, f32)| ((r.cx - x) * wf).hypot((r.cy - y) * hf);
-    if let Some(c) = last {
-        let near = rois
-            .iter()
-            .filter(|r| dist(r, c) < r.side_px(width, height))
-            .min_by(|a, b| dist(a, c).total_cmp(&dist(b, c)));
-        if near.is_some() {
-            return near.copied();
-        }
-    }
-    let by = |f: &dyn Fn(&Roi) -> f32| rois.iter().copied().min_by(|a, b| f(a).total_cmp(&f(b)));
-    match person {
-        PersonChoice::MostConfident => rois.first().copied(),
-        PersonChoice::Largest => by(&|r| -r.side_px(width, height)),
-        PersonChoice::Leftmost => by(&|r| r.cx),
-        PersonChoice::Rightmost => by(&|r| -r.cx),
-        PersonChoice::MostCentral => by(&|r| dist(r, (0.5, 0.5))),
-    }
+    let people: Vec<Candidate> = rois
+        .iter()
+        .zip(dets)
+        .map(|(r, d)| Candidate {
+            cx: r.cx * wf,
+            cy: r.cy * hf,
+            size: r.side_px(width, height),
+            score: d.score,
+        })
+        .collect();
+    let last = last.map(|(x, y)| (x * wf, y * hf));
+    choice::choose(&people, person, last, width, height).map(|i| rois[i])
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
