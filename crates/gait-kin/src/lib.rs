@@ -254,6 +254,21 @@ pub fn analyse_with(
         std::cmp::Ordering::Equal => None,
     };
     let angles = angles::compute(&t, &dirs.per_frame);
+    // Without a toe there is no foot segment: say so instead of leaving the
+    // reader to wonder why the ankle column is empty (OpenPose COCO-18 has no feet).
+    for side in ["left", "right"] {
+        let toe = format!("{side}_toe");
+        let seen = t
+            .names
+            .iter()
+            .position(|name| *name == toe)
+            .is_some_and(|j| t.x[j].iter().any(|v| v.is_finite()));
+        if n > 0 && !seen {
+            warnings.push(format!(
+                "no {toe} keypoint in any frame (the pose model may have no feet, e.g. OpenPose COCO-18): the {side} ankle angle is unavailable"
+            ));
+        }
+    }
 
     let (events, from_file) = match &kin.events_csv {
         Some(p) => (events::read_csv(p)?, true),

@@ -187,3 +187,39 @@ fn bad_settings_are_errors_not_panics() {
     let e = analyse(&seq, &PostprocessConfig::default(), &kin).unwrap_err();
     assert!(e.to_string().contains("/nonexistent/events.csv"), "{e}");
 }
+
+#[test]
+fn a_model_without_feet_has_no_ankle_angle_and_says_so() {
+    // A walker seen from the side whose pose model has no heels or toes
+    // (OpenPose COCO-18): hips and knees swing, the ankle cannot be measured.
+    let seq = make(120, 30.0, |i, name| {
+        if name.ends_with("_heel") || name.ends_with("_toe") {
+            return None;
+        }
+        let phase = i as f64 / 30.0 * std::f64::consts::TAU;
+        let swing = if name.starts_with("left") { 1.0 } else { -1.0 } * 40.0 * phase.sin();
+        let (x, y) = side_pose(name, 3.0 * i as f64)?;
+        Some(match name {
+            n if n.ends_with("_knee") || n.ends_with("_ankle") => (x + swing, y),
+            _ => (x, y),
+        })
+    });
+    let r = analyse(
+        &seq,
+        &PostprocessConfig::default(),
+        &KinematicsConfig::default(),
+    )
+    .expect("analyse");
+    for side in ["left", "right"] {
+        assert!(
+            r.warnings
+                .iter()
+                .any(|w| w.contains(&format!("{side} ankle angle is unavailable"))),
+            "{:?}",
+            r.warnings
+        );
+    }
+    assert!(r.angles.left.ankle.iter().all(|a| a.is_nan()));
+    assert!(r.angles.right.ankle.iter().all(|a| a.is_nan()));
+    assert!(r.angles.left.hip.iter().filter(|a| a.is_finite()).count() > 100);
+}
