@@ -40,13 +40,21 @@ pub trait EventDetector {
 
 /// Zeni et al. (2008) coordinate method, refined by foot speed. Zeni: heel strike at the most
 /// forward heel position relative to the pelvis, toe-off at the most backward toe position. At
-/// those extrema the foot moves exactly as fast as the pelvis; at real contact it is still.
-/// So each heel strike is moved forward to where the heel's forward speed has fallen to
-/// `speed_fraction` of the pelvis' (and each toe-off back to where the toe's speed rose past
-/// it), searched within `refine_s`. `speed_fraction = 1` is plain Zeni.
+/// those extrema the foot moves over the ground exactly as fast as the pelvis; at real contact
+/// the heel is still. So each heel strike is moved forward to where the heel's speed over the
+/// ground has fallen to `speed_fraction` of the walking speed, searched within `refine_s`.
+/// Toe-offs use `toe_speed_fraction` the same way (backwards); its default 1 keeps Zeni's
+/// extremum, because the toe point already moves while the foot rolls over the toes, before
+/// the toe leaves the ground (on the independent trials in tests/independent_mocap.rs the
+/// refined toe-off came 2-4 frames early). A fraction of 1 is plain Zeni.
+///
+/// Speeds are taken over the ground, not the image: the ground's image speed is the stance
+/// foot's (per frame the slower foot, median over +-0.5 s), zero for a fixed camera over a
+/// floor, minus the belt speed on a treadmill. The walking speed is the pelvis' speed over it.
 #[derive(Debug, Clone)]
 pub struct ZeniRefined {
     pub speed_fraction: f64,
+    pub toe_speed_fraction: f64,
     pub refine_s: f64,
     /// Peaks closer than this (seconds) are merged, keeping the larger.
     pub min_stride_s: f64,
@@ -56,6 +64,7 @@ impl Default for ZeniRefined {
     fn default() -> Self {
         Self {
             speed_fraction: 0.5,
+            toe_speed_fraction: 1.0,
             refine_s: 0.2,
             min_stride_s: 0.5,
         }
@@ -112,8 +121,70 @@ pub fn find_peaks(x: &[f64], prominence: f64, min_dist: usize) -> Vec<usize> {
     keep
 }
 
+/// Forward speed (pixels/s) of keypoint `j` at frame `i` by central differences; NaN at the ends,
+/// where a neighbour is missing, or where the direction is unknown.
+fn forward_speed(t: &Tracks, dirs: &[Direction], j: usize, i: usize) -> f64 {
+    let d = dirs.get(i).map_or(0.0, |d| d.sign());
+    if i == 0 || i + 1 >= t.len() || d == 0.0 {
+        return f64::NAN;
+    }
+    match (t.at(j, i - 1), t.at(j, i + 1)) {
+        (Some(a), Some(b)) => d * (b.0 - a.0) * t.fps / 2.0,
+        _ => f64::NAN,
+    }
+}
+
+/// Per-frame forward image speed of the ground under the feet: the slower foot's speed (the
+/// stance foot never moves faster than the ground, a swinging one does), median over +-0.5 s
+/// to bridge double support and noise. 0 where no foot is seen.
+fn ground_speed(t: &Tracks, dirs: &[Direction]) -> Vec<f64> {
+    let n = t.len();
+    let feet: Vec<Vec<usize>> = Side::BOTH
+        .iter()
+        .map(|&s| {
+            ["heel", "toe"]
+                .iter()
+                .filter_map(|p| t.leg_index(s, p))
+                .collect()
+        })
+        .collect();
+    let raw: Vec<f64> = (0..n)
+        .map(|i| {
+            feet.iter()
+                .filter(|f| !f.is_empty())
+                .map(|f| {
+                    f.iter().map(|&j| forward_speed(t, dirs, j, i)).sum::<f64>() / f.len() as f64
+                })
+                .filter(|v| v.is_finite())
+                .fold(f64::NAN, f64::min)
+        })
+        .collect();
+    let w = (0.5 * t.fps).round().max(1.0) as usize;
+    (0..n)
+        .map(|i| {
+            let mut win: Vec<f64> = raw[i.saturating_sub(w)..(i + w + 1).min(n)]
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .collect();
+            if win.is_empty() {
+                return 0.0;
+            }
+            win.sort_by(f64::total_cmp);
+            win[win.len() / 2]
+        })
+        .collect()
+}
+
 impl ZeniRefined {
-    fn side_events(&self, t: &Tracks, dirs: &[Direction], side: Side, leg: f64) -> Vec<Event> {
+    fn side_events(
+        &self,
+        t: &Tracks,
+        dirs: &[Direction],
+        ground: &[f64],
+        side: Side,
+        leg: f64,
+    ) -> Vec<Event> {
         let n = t.len();
         let fps = t.fps;
         let pick = |parts: &[&str]| parts.iter().find_map(|p| t.leg_index(side, p));
@@ -129,32 +200,26 @@ impl ZeniRefined {
         let toe_back: Vec<f64> = (0..n).map(|i| -rel(toe, i)).collect();
         let min_dist = (self.min_stride_s * fps).round() as usize;
         let prom = 0.1 * leg;
-        // Forward speed (pixels/s) of keypoint j, central differences.
-        let speed = |j: usize, i: usize| -> f64 {
-            if i == 0 || i + 1 >= n {
-                return f64::NAN;
-            }
-            match (t.at(j, i - 1), t.at(j, i + 1)) {
-                (Some(a), Some(b)) => d(i) * (b.0 - a.0) * fps / 2.0,
-                _ => f64::NAN,
-            }
-        };
-        let pelvis_speed = |i: usize| -> f64 {
+        // Speeds over the ground (pixels/s).
+        let speed = |j: usize, i: usize| forward_speed(t, dirs, j, i) - ground[i];
+        let walking_speed = |i: usize| -> f64 {
             let w = (0.25 * fps).round().max(1.0) as usize;
             let (lo, hi) = (i.saturating_sub(w), (i + w).min(n - 1));
             match (t.pelvis(lo), t.pelvis(hi)) {
-                (Some(a), Some(b)) if hi > lo => d(i) * (b.0 - a.0) * fps / (hi - lo) as f64,
+                (Some(a), Some(b)) if hi > lo => {
+                    d(i) * (b.0 - a.0) * fps / (hi - lo) as f64 - ground[i]
+                }
                 _ => f64::NAN,
             }
         };
         let steps = (self.refine_s * fps).round() as usize;
-        // Where foot speed crosses `fraction * pelvis speed`, as a rounded fractional frame.
-        let refine = |j: usize, p: usize, forward: bool| -> usize {
-            let vp = pelvis_speed(p);
-            if !(vp.is_finite() && vp > 0.0) {
+        // Where foot speed crosses `fraction * walking speed`, as a rounded fractional frame.
+        let refine = |j: usize, p: usize, forward: bool, fraction: f64| -> usize {
+            let vp = walking_speed(p);
+            if fraction >= 1.0 || !(vp.is_finite() && vp > 0.0) {
                 return p;
             }
-            let target = self.speed_fraction * vp;
+            let target = fraction * vp;
             for k in 0..steps {
                 let (a, b) = if forward {
                     (p + k, p + k + 1)
@@ -192,7 +257,7 @@ impl ZeniRefined {
         let mut out = Vec::new();
         for p in find_peaks(&heel_rel, prom, min_dist) {
             if stable(p) {
-                let frame = refine(heel, p, true);
+                let frame = refine(heel, p, true, self.speed_fraction);
                 out.push(Event {
                     side,
                     event: EventKind::HeelStrike,
@@ -202,7 +267,7 @@ impl ZeniRefined {
         }
         for p in find_peaks(&toe_back, prom, min_dist) {
             if stable(p) {
-                let frame = refine(toe, p, false);
+                let frame = refine(toe, p, false, self.toe_speed_fraction);
                 out.push(Event {
                     side,
                     event: EventKind::ToeOff,
@@ -220,9 +285,10 @@ impl EventDetector for ZeniRefined {
         if !leg.is_finite() || t.fps <= 0.0 {
             return Vec::new();
         }
+        let ground = ground_speed(t, dirs);
         let mut ev: Vec<Event> = Side::BOTH
             .iter()
-            .flat_map(|&s| self.side_events(t, dirs, s, leg))
+            .flat_map(|&s| self.side_events(t, dirs, &ground, s, leg))
             .collect();
         sort(&mut ev);
         ev
