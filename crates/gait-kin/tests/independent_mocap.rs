@@ -252,10 +252,10 @@ fn parkinson_overground_toe_offs_meet_the_target() {
 
 /// The heel-strike target is NOT met on this trial (mean 3.0 frames = 20 ms over the
 /// five matched annotations, and left 581 is 12 frames from the nearest detection). The right
-/// foot meets it; this subject's left heel reaches the floor while still moving forward at about
-/// the walking speed (heel speed over the ground at the annotated contacts: 0.9-1.1 times the
-/// pelvis speed, see tests/data/gaitkit_pd/README.md), so a criterion that waits for the heel to
-/// slow down is late there. What is asserted: the right foot meets the target, and every left
+/// foot meets it; this subject's left heel reaches the floor while still moving forward faster
+/// than the pelvis (heel marker speed at the annotated contacts: 1.1-1.7 times the pelvis speed,
+/// see tests/data/gaitkit_pd/README.md), so a criterion that waits for the heel to slow down is
+/// late there. What is asserted: the right foot meets the target, and every left
 /// heel strike is found late by at most 0.1 s, never early.
 #[test]
 fn parkinson_overground_heel_strikes() {
