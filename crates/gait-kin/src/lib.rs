@@ -113,7 +113,7 @@ pub fn analyse(
     kin: &KinematicsConfig,
 ) -> Result<KinResult, KinError> {
     let gate = LikelihoodThreshold(post.likelihood_threshold);
-    let swap = ContinuitySwap;
+    let swap = ContinuitySwap::default();
     let gap: Box<dyn GapFiller> = match post.gap_fill {
         GapFillKind::CubicSpline => Box::new(spline::CubicSplineFill),
         GapFillKind::Linear => Box::new(spline::LinearFill),

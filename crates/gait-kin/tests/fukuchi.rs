@@ -262,9 +262,13 @@ impl Rng {
 }
 
 /// Injects single frames and runs of 2..=30 frames of swapped leg labels at random places, then
-/// scores detection frame by frame. `noise_px` adds Gaussian jitter (pose-estimator-like).
-fn swap_scores(noise_px: f64, trials: u64) -> (f64, f64) {
-    let seq = sequence();
+/// scores detection frame by frame. `noise_px` adds Gaussian jitter (pose-estimator-like);
+/// `step` keeps every step-th frame (5: the 150 Hz capture seen as 30 fps video).
+fn swap_scores(noise_px: f64, trials: u64, step: usize) -> (f64, f64) {
+    let mut seq = sequence();
+    seq.poses = seq.poses.into_iter().step_by(step).collect();
+    seq.frames = (0..seq.poses.len()).collect();
+    seq.fps /= step as f64;
     let (mut tp, mut fp, mut fn_) = (0usize, 0usize, 0usize);
     for seed in 1..=trials {
         let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0xD1B5_4A32_D192_ED03));
@@ -283,7 +287,7 @@ fn swap_scores(noise_px: f64, trials: u64) -> (f64, f64) {
             let len = if rng.below(3) == 0 {
                 1
             } else {
-                2 + rng.below(29)
+                2 + rng.below(29.min(n / 4))
             };
             let start = rng.below(n - len);
             for s in &mut truth[start..start + len] {
@@ -295,7 +299,7 @@ fn swap_scores(noise_px: f64, trials: u64) -> (f64, f64) {
                 swap_frame(&mut t, i);
             }
         }
-        let found = ContinuitySwap.detect(&t);
+        let found = ContinuitySwap::default().detect(&t);
         for (f, w) in found.iter().zip(&truth) {
             match (f, w) {
                 (true, true) => tp += 1,
@@ -313,12 +317,16 @@ fn swap_scores(noise_px: f64, trials: u64) -> (f64, f64) {
 
 #[test]
 fn swap_detection_precision_and_recall() {
-    let (p, r) = swap_scores(0.0, 40);
-    println!("mocap swaps: precision {p:.4} recall {r:.4}");
-    assert!(p >= 0.95 && r >= 0.95, "precision {p} recall {r}");
-    let (p, r) = swap_scores(2.0, 40);
-    println!("mocap + 2 px noise: precision {p:.4} recall {r:.4}");
-    assert!(p >= 0.95 && r >= 0.95, "precision {p} recall {r}");
+    // The target holds on the capture rate. Seen as 30 fps video the legs move
+    // 5x further between frames and a run that starts or ends while the legs cross is
+    // ambiguous by a frame or two; that lower level (measured 0.83 / 0.75, with 2 px noise
+    // 0.87 / 0.80) is guarded, not claimed to meet the target.
+    for (noise, step, bar) in [(0.0, 1, 0.95), (2.0, 1, 0.95), (0.0, 5, 0.7), (2.0, 5, 0.7)] {
+        let (p, r) = swap_scores(noise, 40, step);
+        let hz = 150 / step;
+        println!("mocap at {hz} Hz + {noise} px noise: precision {p:.4} recall {r:.4}");
+        assert!(p >= bar && r >= bar, "{hz} Hz: precision {p} recall {r}");
+    }
 }
 
 #[test]
