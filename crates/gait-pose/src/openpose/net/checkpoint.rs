@@ -1,0 +1,157 @@
+//! Reading a checkpoint's tensors by name: PyTorch `.pth` (the zip format of
+//! torch >= 1.6 through `candle_core::pickle`, and the older "legacy" format,
+//! which `body_pose_model.pth` may well be in) and `.safetensors`.
+
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+use candle_core::pickle::{Object, Stack, TensorInfo};
+use candle_core::{DType, Device, Tensor};
+
+use super::WeightsError;
+
+/// `torch.save`'s legacy format starts with a pickle (protocol 2) of this
+/// magic number (a 10-byte long): `\x80\x02\x8a\x0a` + its bytes + STOP.
+const LEGACY_MAGIC: [u8; 15] = [
+    0x80, 0x02, 0x8a, 0x0a, 0x6c, 0xfc, 0x9c, 0x46, 0xf9, 0x20, 0x6a, 0xa8, 0x50, 0x19, 0x2e,
+];
+const ZIP_MAGIC: [u8; 4] = *b"PK\x03\x04";
+
+fn read_err(e: impl ToString) -> WeightsError {
+    WeightsError::Read(e.to_string())
+}
+
+/// Every tensor in the file, converted to f32, by name.
+pub(crate) fn read_tensors(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
+    let mut head = [0u8; 15];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .map_err(read_err)?;
+    let head = &head[..n];
+    let tensors = if path.extension().is_some_and(|e| e == "safetensors") {
+        candle_core::safetensors::load(path, &Device::Cpu).map_err(read_err)?
+    } else if head.starts_with(&ZIP_MAGIC) {
+        read_zip_pth(path)?
+    } else if head == LEGACY_MAGIC {
+        read_legacy_pth(path)?
+    } else {
+        return Err(WeightsError::Read(
+            "neither a PyTorch checkpoint (.pth, zip or legacy format) nor .safetensors".into(),
+        ));
+    };
+    tensors
+        .into_iter()
+        .map(|(name, t)| {
+            let t = if t.dtype() == DType::F32 {
+                t
+            } else {
+                t.to_dtype(DType::F32).map_err(read_err)?
+            };
+            Ok((name, t))
+        })
+        .collect()
+}
+
+fn read_zip_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
+    let pth = candle_core::pickle::PthTensors::new(path, None).map_err(read_err)?;
+    let mut out = HashMap::new();
+    for name in pth.tensor_infos().keys() {
+        let t = pth
+            .get(name)
+            .map_err(|e| WeightsError::Read(format!("tensor `{name}`: {e}")))?
+            .ok_or_else(|| WeightsError::Read(format!("tensor `{name}` vanished")))?;
+        out.insert(name.clone(), t);
+    }
+    Ok(out)
+}
+
+/// The legacy format: pickles of the magic number, the protocol version, the
+/// system info and the object (whose tensors name storages by key), then a
+/// pickled list of storage keys, then each storage as a little-endian u64
+/// element count followed by its raw bytes.
+fn read_legacy_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
+    let mut r = BufReader::new(std::fs::File::open(path).map_err(read_err)?);
+    // Skipped, not parsed: candle's unpickler cannot take a 10-byte long.
+    let mut magic = [0u8; LEGACY_MAGIC.len()];
+    r.read_exact(&mut magic).map_err(read_err)?;
+    let _protocol = unpickle(&mut r)?;
+    let _sys_info = unpickle(&mut r)?;
+    let Object::Dict(entries) = unpickle(&mut r)? else {
+        return Err(WeightsError::Read(
+            "the checkpoint is not a dict of tensors (a state_dict)".into(),
+        ));
+    };
+    let mut infos: Vec<TensorInfo> = Vec::with_capacity(entries.len());
+    for (name, value) in entries {
+        // The storage tuple of this format has the same first five fields as
+        // the zip format's, so candle's parser applies.
+        if let Some(info) = value
+            .into_tensor_info(name, Path::new(""))
+            .map_err(read_err)?
+        {
+            infos.push(info);
+        }
+    }
+    let keys = match unpickle(&mut r)? {
+        Object::List(k) | Object::Tuple(k) => k
+            .into_iter()
+            .map(|k| {
+                k.unicode()
+                    .map_err(|o| read_err(format!("storage key {o:?}")))
+            })
+            .collect::<Result<Vec<_>, _>>()?,
+        o => return Err(read_err(format!("expected storage keys, found {o:?}"))),
+    };
+    let key_of = |info: &TensorInfo| info.path.trim_start_matches('/').to_string();
+    let mut storages: HashMap<String, Vec<u8>> = HashMap::new();
+    for key in keys {
+        let dtype = infos
+            .iter()
+            .find(|i| key_of(i) == key)
+            .map(|i| i.dtype)
+            .ok_or_else(|| read_err(format!("storage {key} belongs to no tensor")))?;
+        let mut count = [0u8; 8];
+        r.read_exact(&mut count).map_err(read_err)?;
+        let bytes = (u64::from_le_bytes(count) as usize)
+            .checked_mul(dtype.size_in_bytes())
+            .ok_or_else(|| read_err("storage size overflows"))?;
+        let mut data = Vec::new();
+        (&mut r)
+            .take(bytes as u64)
+            .read_to_end(&mut data)
+            .map_err(read_err)?;
+        if data.len() != bytes {
+            return Err(read_err(format!("storage {key} is truncated")));
+        }
+        storages.insert(key, data);
+    }
+    let mut out = HashMap::new();
+    for info in infos {
+        let layout = &info.layout;
+        if !layout.is_contiguous() {
+            return Err(read_err(format!(
+                "tensor `{}` is not contiguous",
+                info.name
+            )));
+        }
+        let data = storages
+            .get(&key_of(&info))
+            .ok_or_else(|| read_err(format!("tensor `{}`: storage missing", info.name)))?;
+        let start = layout.start_offset();
+        let len = layout.shape().elem_count() * info.dtype.size_in_bytes();
+        let bytes = data
+            .get(start..start + len)
+            .ok_or_else(|| read_err(format!("tensor `{}` overruns its storage", info.name)))?;
+        let t = Tensor::from_raw_buffer(bytes, info.dtype, layout.dims(), &Device::Cpu)
+            .map_err(read_err)?;
+        out.insert(info.name, t);
+    }
+    Ok(out)
+}
+
+fn unpickle<R: BufRead>(r: &mut R) -> Result<Object, WeightsError> {
+    let mut stack = Stack::empty();
+    stack.read_loop(r).map_err(read_err)?;
+    stack.finalize().map_err(read_err)
+}
