@@ -8,7 +8,7 @@ scipy==1.17.1, numpy. Regenerate from the repo root:
 
 Writes crates/gait-pose/tests/fixtures/openpose/decode/:
 - resize.json: cv2.resize results (uint8 images, float32 maps as little-endian hex; CUBIC / LANCZOS4 / AREA,
-  explicit dsize and fx/fy factors).
+  explicit dsize and fx/fy factors), with Intel IPP off (OpenCV's own code) and as a default cv2 returns them.
 - gaussian.json: scipy.ndimage.gaussian_filter(sigma=3) on float64 maps.
 - <case>.json + <case>.bin: synthetic stride-8 network outputs (float16, exactly what the fake
   network handed to controlnet_aux, heatmaps then PAFs per scale, CHW) and the `candidate` /
@@ -50,11 +50,20 @@ def resize_fixtures():
     fmap = (rng.standard_normal((9, 7)) * 2.0).astype(np.float32)
     fmap2 = (rng.standard_normal((23, 31))).astype(np.float32)
 
-    def add(name, src, interp, dsize=None, f=None):
+    def resize(src, interp, dsize, f):
         if dsize is not None:
-            out = cv2.resize(src, dsize, interpolation=interp)
-        else:
-            out = cv2.resize(src, (0, 0), fx=f, fy=f, interpolation=interp)
+            return cv2.resize(src, dsize, interpolation=interp)
+        return cv2.resize(src, (0, 0), fx=f, fy=f, interpolation=interp)
+
+    def add(name, src, interp, dsize=None, f=None):
+        # opencv-python routes some resizes (INTER_CUBIC at least) through Intel IPP, whose
+        # arithmetic is not OpenCV's own; "dst" is OpenCV's own code (IPP off), "dst_default"
+        # what a default cv2 returns (null where the same).
+        default = resize(src, interp, dsize, f)
+        cv2.ipp.setUseIPP(False)
+        out = resize(src, interp, dsize, f)
+        cv2.ipp.setUseIPP(True)
+        assert cv2.ipp.useIPP()
         cases.append({
             "name": name,
             "dtype": str(src.dtype),
@@ -65,6 +74,7 @@ def resize_fixtures():
             "factor": f,
             "dst_shape": list(out.shape),
             "dst": hexed(out),
+            "dst_default": None if np.array_equal(default, out) else hexed(default),
         })
 
     for interp in (cv2.INTER_CUBIC, cv2.INTER_LANCZOS4):

@@ -10,7 +10,8 @@ pub fn gaussian_filter(
     sigma: f64,
     truncate: f64,
 ) -> Vec<f64> {
-    if width == 0 || height == 0 || map.len() != width * height || !(sigma > 0.0) {
+    let positive = sigma > 0.0;
+    if width == 0 || height == 0 || map.len() != width * height || !positive {
         return map.to_vec();
     }
     let w = kernel(sigma, truncate);
