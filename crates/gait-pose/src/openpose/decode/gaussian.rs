@@ -112,7 +112,7 @@ mod tests {
     #[test]
     fn reflection_repeats_for_short_lines() {
         let idx: Vec<usize> = (-4..6).map(|i| reflect(i, 2)).collect();
-        assert_eq!(idx, vec![0, 0, 1, 1, 0, 0, 1, 1, 0, 0]);
+        assert_eq!(idx, vec![0, 1, 1, 0, 0, 1, 1, 0, 0, 1]);
     }
 
     #[test]
