@@ -167,6 +167,50 @@ fn missing_model_file_names_the_fetch_command() {
 }
 
 #[test]
+fn missing_openpose_weights_name_the_fetch_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    fails_with(
+        gait()
+            .args(["run", "--no-progress", "--models-dir"])
+            .arg(dir.path().join("no-models"))
+            .arg("--input")
+            .arg(common::sample_video())
+            .args(["--set", "pose.kind=openpose", "--out"])
+            .arg(&out),
+        &["body_pose_model.pth", "gait models fetch openpose"],
+    );
+    assert_no_results(&out);
+}
+
+#[test]
+fn every_shipped_config_parses() {
+    // Each config gets past parsing and validation: the run then stops at
+    // the missing input, not at the config.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs");
+    let dir = tempfile::tempdir().unwrap();
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&root).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        seen += 1;
+        fails_with(
+            gait()
+                .args(["run", "--no-progress", "--config"])
+                .arg(&path)
+                .arg("--input")
+                .arg(dir.path().join("nope.mp4"))
+                .arg("--out")
+                .arg(dir.path().join("out")),
+            &["nope.mp4"],
+        );
+    }
+    assert!(seen >= 4, "configs found: {seen}");
+}
+
+#[test]
 fn every_subcommand_has_help() {
     let out = gait().arg("--help").output().unwrap();
     assert!(out.status.success());

@@ -127,6 +127,44 @@ fn repo_and_revision_flags_change_the_source() {
 }
 
 #[test]
+fn openpose_without_hub_says_where_the_checkpoint_goes() {
+    let dir = tempfile::tempdir().unwrap();
+    let endpoint = closed_endpoint();
+    let dest = dir.path().join("openpose").join("body_pose_model.pth");
+    fails_with(
+        &mut fetch(dir.path(), &endpoint, &["openpose"]),
+        &[
+            "cannot reach the Hugging Face Hub",
+            &format!(
+                "download body_pose_model.pth from {endpoint}/lllyasviel/Annotators/resolve/main/body_pose_model.pth"
+            ),
+            &format!("put it at {}", dest.display()),
+        ],
+    );
+    // Another repository and file: still saved where the estimator looks.
+    fails_with(
+        &mut fetch(
+            dir.path(),
+            &endpoint,
+            &["openpose", "--repo", "me/poses", "--file", "body/coco.pth"],
+        ),
+        &[
+            &format!("download coco.pth from {endpoint}/me/poses/resolve/main/body/coco.pth"),
+            &format!("put it at {}", dest.display()),
+        ],
+    );
+    fails_with(
+        &mut fetch(
+            dir.path(),
+            &endpoint,
+            &["sd15-controlnet-canny", "--file", "x.safetensors"],
+        ),
+        &["--file", "single-file models", "sd15-controlnet-canny"],
+    );
+    assert_empty(dir.path());
+}
+
+#[test]
 fn missing_models_folder_is_not_created() {
     let dir = tempfile::tempdir().unwrap();
     let models = dir.path().join("models");
@@ -151,7 +189,7 @@ fn list_shows_hub_models_missing_then_present() {
             .to_string()
     };
     let before = list(dir.path());
-    for name in ["hed", "sd15-controlnet-canny"] {
+    for name in ["hed", "openpose", "sd15-controlnet-canny"] {
         assert!(line(&before, name).contains(" missing "), "{before}");
     }
     // A file put by hand (the manual route of the error above) counts.

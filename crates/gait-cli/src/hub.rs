@@ -1,6 +1,6 @@
 //! Downloads of model files from the Hugging Face Hub (`gait models fetch hed`,
-//! `gait models fetch sd15-controlnet-canny`), checked against the Hub's own
-//! checksums.
+//! `openpose`, `sd15-controlnet-canny`), checked against the Hub's own
+//! checksums (the sha256 of LFS files).
 
 use std::fmt::Write as _;
 use std::io::Read;
@@ -39,6 +39,16 @@ pub fn defaults(model: &str, models_dir: &Path) -> Option<Vec<HubRepo>> {
             models_dir,
             &["ControlNetHED.pth"],
         )]),
+        // gait-pose's OpenPose (candle backend, COCO-18) reads
+        // <models>/openpose/body_pose_model.pth.
+        "openpose" => Some(vec![HubRepo {
+            id: "lllyasviel/Annotators".to_string(),
+            revision: "main".to_string(),
+            files: vec![(
+                "body_pose_model.pth".to_string(),
+                models_dir.join(gait_pose::openpose::OpenposeConfig::FETCHED_CHECKPOINT),
+            )],
+        }]),
         // gait-diffuse reads these (configs when present; the tokenizer is
         // built from merges.txt alone) from its default folders.
         "sd15-controlnet-canny" => Some(vec![

@@ -18,6 +18,8 @@ use serde::{Deserialize, Serialize};
 pub enum PoseConfig {
     /// MediaPipe BlazePose (full), the default model.
     Blazepose(blazepose::BlazeposeConfig),
+    /// The OpenPose body model (COCO-18 or BODY_25), the paper's estimator.
+    Openpose(openpose::OpenposeConfig),
     /// An external estimator loaded from a shared library (see docs/adding-a-stage.md).
     Plugin(gait_plugin::PluginConfig),
 }
@@ -26,6 +28,7 @@ impl PoseConfig {
     pub fn build(&self, ctx: &StageContext) -> Result<Box<dyn PoseEstimator>, StageError> {
         match self {
             PoseConfig::Blazepose(c) => c.build(ctx),
+            PoseConfig::Openpose(c) => c.build(ctx),
             PoseConfig::Plugin(p) => gait_plugin::load_pose_estimator(p, ctx),
         }
     }
@@ -34,6 +37,7 @@ impl PoseConfig {
     pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
         match self {
             PoseConfig::Blazepose(c) => c.model_files(ctx),
+            PoseConfig::Openpose(c) => c.model_files(ctx),
             PoseConfig::Plugin(p) => vec![p.resolved_path()],
         }
     }

@@ -14,7 +14,7 @@ pub struct Args {
 enum Action {
     /// Download a model into the models folder (checksums verified)
     Fetch {
-        /// Which model: blazepose, hed, sd15-controlnet-canny
+        /// Which model: blazepose, hed, openpose, sd15-controlnet-canny
         name: String,
         /// Hugging Face repository to download from [default: the model's usual one; for
         /// sd15-controlnet-canny the Stable Diffusion 1.5 repository]
@@ -23,6 +23,10 @@ enum Action {
         /// Branch, tag or commit of --repo
         #[arg(long, value_name = "REV", default_value = "main")]
         revision: String,
+        /// hed and openpose only: the file's path inside --repo [default: ControlNetHED.pth,
+        /// body_pose_model.pth]; it is saved where the stage looks for it
+        #[arg(long, value_name = "PATH")]
+        file: Option<String>,
         /// sd15-controlnet-canny only: the ControlNet repository [default: lllyasviel/sd-controlnet-canny]
         #[arg(long, value_name = "ID")]
         controlnet_repo: Option<String>,
@@ -34,7 +38,7 @@ enum Action {
     List,
 }
 
-const MODELS: [(&str, &str); 3] = [
+const MODELS: [(&str, &str); 4] = [
     (
         "blazepose",
         "MediaPipe BlazePose full (from the PyPI wheel mediapipe==0.10.14)",
@@ -42,6 +46,10 @@ const MODELS: [(&str, &str); 3] = [
     (
         "hed",
         "HED edge detector, ControlNetHED.pth (Hugging Face lllyasviel/Annotators)",
+    ),
+    (
+        "openpose",
+        "OpenPose body model COCO-18, body_pose_model.pth (Hugging Face lllyasviel/Annotators)",
     ),
     (
         "sd15-controlnet-canny",
@@ -55,6 +63,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
             name,
             repo,
             revision,
+            file,
             controlnet_repo,
             controlnet_revision,
         } => {
@@ -64,6 +73,14 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                         repos[0].id = id;
                     }
                     repos[0].revision = revision;
+                    if let Some(f) = file {
+                        if repos.len() != 1 || repos[0].files.len() != 1 {
+                            return Err(CliError(format!(
+                                "--file applies to single-file models (hed, openpose), not `{name}`"
+                            )));
+                        }
+                        repos[0].files[0].0 = f;
+                    }
                     match repos.get_mut(1) {
                         Some(cn) => {
                             if let Some(id) = controlnet_repo {
@@ -82,12 +99,13 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                         .map_err(|e| CliError(one_line(&e.to_string())))?
                 }
                 None if repo.is_some()
+                    || file.is_some()
                     || controlnet_repo.is_some()
                     || revision != "main"
                     || controlnet_revision != "main" =>
                 {
                     return Err(CliError(format!(
-                        "`{name}` does not come from the Hugging Face Hub: --repo, --revision and the --controlnet-* options do not apply"
+                        "`{name}` does not come from the Hugging Face Hub: --repo, --revision, --file and the --controlnet-* options do not apply"
                     )));
                 }
                 None => fetch_other(&name, models_dir)?,

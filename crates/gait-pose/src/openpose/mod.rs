@@ -5,8 +5,15 @@
 //! `net` runs a network on one prepared image; `decode` does everything
 //! around it (scales, padding, upsampling, peaks, PAF assembly).
 
+mod config;
 pub mod decode;
+mod estimator;
+mod names;
 pub mod net;
+
+pub use config::OpenposeConfig;
+pub use estimator::Openpose;
+pub use names::keypoint_names;
 
 use gait_core::StageError;
 use serde::{Deserialize, Serialize};

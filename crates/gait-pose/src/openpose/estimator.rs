@@ -1,0 +1,135 @@
+//! The OpenPose estimator: network + decoding per frame, then the choice of
+//! the person to follow (see [`crate::person`]).
+
+use gait_core::{Backend, Frame, Pose, PoseEstimator, StageContext, StageError};
+
+use super::config::OpenposeConfig;
+use super::decode::{self, Person};
+use super::{OpenposeModel, OpenposeNet, names, net};
+use crate::person::{self, Candidate};
+
+/// The OpenPose estimator (implements [`PoseEstimator`]).
+pub struct Openpose {
+    net: Box<dyn OpenposeNet>,
+    config: OpenposeConfig,
+    /// Centre of the person followed in the previous frame (pixels).
+    last_centre: Option<(f32, f32)>,
+}
+
+impl Openpose {
+    /// Loads the network named by the config.
+    pub fn new(config: &OpenposeConfig, ctx: &StageContext) -> Result<Self, StageError> {
+        let path = config.weights(ctx);
+        if !path.is_file() {
+            let hint = match config.backend {
+                Backend::Candle => "run `gait models fetch openpose` or set model_path".to_string(),
+                Backend::Ort => format!(
+                    "export it with tools/openpose/export_onnx.py (from the checkpoint of `gait models fetch openpose`{}) or set model_path",
+                    if config.model == OpenposeModel::Body25 {
+                        "; BODY_25 needs OpenPose's own model converted to ONNX"
+                    } else {
+                        ""
+                    }
+                ),
+            };
+            return Err(StageError::MissingModel { path, hint });
+        }
+        Ok(Self {
+            net: net::load(&path, config.model, config.backend)?,
+            config: config.clone(),
+            last_centre: None,
+        })
+    }
+
+    fn estimate_one(&mut self, frame: &Frame) -> Result<Pose, StageError> {
+        let model = self.config.model;
+        let net = &mut self.net;
+        let found = decode::detect(frame, model, &self.config.search, &mut |input| {
+            net.run(input)
+        })?;
+        let people: Vec<Candidate> = found.people.iter().map(candidate).collect();
+        let chosen = person::choose(
+            &people,
+            self.config.person,
+            self.last_centre,
+            frame.width(),
+            frame.height(),
+        );
+        let Some(i) = chosen else {
+            self.last_centre = None;
+            return Ok(Pose {
+                keypoints: names::to_keypoints(model, &[]),
+            });
+        };
+        self.last_centre = Some((people[i].cx, people[i].cy));
+        Ok(Pose {
+            keypoints: names::to_keypoints(model, &found.people[i].keypoints),
+        })
+    }
+}
+
+/// A person's box centre and size from its keypoints.
+fn candidate(p: &Person) -> Candidate {
+    let pts: Vec<[f32; 3]> = p.keypoints.iter().flatten().copied().collect();
+    let span = |k: usize| {
+        let lo = pts.iter().map(|q| q[k]).fold(f32::INFINITY, f32::min);
+        let hi = pts.iter().map(|q| q[k]).fold(f32::NEG_INFINITY, f32::max);
+        (lo, hi)
+    };
+    let ((x0, x1), (y0, y1)) = (span(0), span(1));
+    Candidate {
+        cx: (x0 + x1) / 2.0,
+        cy: (y0 + y1) / 2.0,
+        size: (x1 - x0).max(y1 - y0).max(1.0),
+        score: p.score,
+    }
+}
+
+impl PoseEstimator for Openpose {
+    fn keypoint_names(&self) -> Vec<String> {
+        names::keypoint_names(self.config.model)
+    }
+
+    fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError> {
+        frames.iter().map(|f| self.estimate_one(f)).collect()
+    }
+
+    fn reset(&mut self) {
+        self.last_centre = None;
+    }
+
+    /// Little-endian f32s: presence flag, centre x, centre y.
+    fn state(&self) -> Option<Vec<u8>> {
+        let v = self.last_centre.map_or([0.0; 3], |(x, y)| [1.0, x, y]);
+        Some(v.iter().flat_map(|f| f.to_le_bytes()).collect())
+    }
+
+    fn restore(&mut self, state: &[u8]) -> bool {
+        if state.len() != 12 {
+            return false;
+        }
+        let v: Vec<f32> = state
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        self.last_centre = (v[0] == 1.0).then_some((v[1], v[2]));
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_of_found_keypoints() {
+        let p = Person {
+            keypoints: vec![Some([10.0, 20.0, 0.9]), None, Some([30.0, 60.0, 0.5])],
+            peak_ids: vec![Some(0), None, Some(1)],
+            score: 3.0,
+            parts: 2,
+        };
+        let c = candidate(&p);
+        assert_eq!((c.cx, c.cy, c.size, c.score), (20.0, 40.0, 40.0, 3.0));
+    }
+}
