@@ -15,6 +15,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::PipelineError;
+use crate::selection::SelectionConfig;
 
 /// The built-in baseline: no edge map, passthrough, the default pose model.
 pub const DEFAULT_TOML: &str = include_str!("../../../configs/default.toml");
@@ -60,6 +61,8 @@ impl Default for RunConfig {
 pub struct PipelineConfig {
     pub input: InputConfig,
     pub run: RunConfig,
+    /// Which frames are regenerated and which are interpolated.
+    pub selection: SelectionConfig,
     pub edge: EdgeConfig,
     pub regenerator: RegeneratorConfig,
     pub pose: PoseConfig,
@@ -69,9 +72,10 @@ pub struct PipelineConfig {
     pub kinematics: KinematicsConfig,
 }
 
-const TABLES: [&str; 7] = [
+const TABLES: [&str; 8] = [
     "input",
     "run",
+    "selection",
     "edge",
     "regenerator",
     "pose",
@@ -135,6 +139,7 @@ impl PipelineConfig {
         let config = Self {
             input: table_as(origin, "input", take("input")?)?,
             run: table_as(origin, "run", take("run")?)?,
+            selection: table_as(origin, "selection", take("selection")?)?,
             edge: table_as(origin, "edge", take("edge")?)?,
             regenerator: table_as(origin, "regenerator", take("regenerator")?)?,
             pose: table_as(origin, "pose", take("pose")?)?,
@@ -166,6 +171,9 @@ impl PipelineConfig {
                 "[input] fps must be a positive number",
             ));
         }
+        self.selection
+            .validate()
+            .map_err(|e| PipelineError::config(origin, format!("[selection] {e}")))?;
         // The frame rate is known only once the input is open; 30 stands in
         // for checks that do not depend on it.
         self.postprocess

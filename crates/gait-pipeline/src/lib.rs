@@ -5,13 +5,17 @@
 pub mod atomic;
 mod cache;
 pub mod config;
+mod driver;
 pub mod edges;
 mod error;
 pub mod input;
+pub mod interpolate;
 pub mod manifest;
 pub mod registry;
 pub mod runner;
+pub mod selection;
 
 pub use config::PipelineConfig;
 pub use error::PipelineError;
 pub use runner::{RunOptions, RunSummary, run};
+pub use selection::{SelectionConfig, SelectionRecord};

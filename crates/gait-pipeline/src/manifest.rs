@@ -9,6 +9,7 @@ use serde::Serialize;
 use sha2::{Digest, Sha256};
 
 use crate::input::hex;
+use crate::selection::SelectionRecord;
 
 /// The run manifest written as `run.json`.
 #[derive(Debug, Clone, Serialize)]
@@ -26,6 +27,9 @@ pub struct RunManifest {
     pub frames_processed: usize,
     /// Frames whose pose came from the cache (a resumed or repeated run).
     pub frames_from_cache: usize,
+    /// Which frames were regenerated, kept their original-frame pose or
+    /// were interpolated, and why frames were judged poor.
+    pub selection: SelectionRecord,
     pub keypoint_names: Vec<String>,
     pub warnings: Vec<String>,
     /// Summaries added by later steps (kinematics, reports).

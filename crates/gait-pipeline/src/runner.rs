@@ -1,18 +1,22 @@
-//! Drives frames through the stages in batches, using the per-frame cache,
-//! and writes `keypoints.csv` and `run.json` into the run folder.
+//! Runs the passes over the input (original-frame poses when only poor
+//! frames are regenerated, then the regeneration pass), fills the frames a
+//! stride skipped, and writes `keypoints.csv` and `run.json` into the run
+//! folder.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use std::time::{SystemTime, UNIX_EPOCH};
 
-use gait_core::{EdgeMap, Frame, Pose, PoseSequence, StageContext};
+use gait_core::{Pose, PoseSequence, StageContext};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::cache::{StageCache, chain_key};
+use crate::driver::{Caches, Driver, Order};
 use crate::input::InputInfo;
 use crate::manifest::{InputRecord, RunManifest, StageRecord, model_records};
 use crate::registry::{self, Stages};
-use crate::{PipelineConfig, PipelineError, atomic};
+use crate::selection::{self, SelectionMode, SelectionRecord};
+use crate::{PipelineConfig, PipelineError, atomic, interpolate};
 
 /// Where a run reads from and writes to.
 #[derive(Debug, Clone)]
@@ -45,11 +49,17 @@ impl RunSummary {
     }
 }
 
-struct Caches {
+/// The stage caches of a run; `original` holds the poses found on the
+/// original frames (`selection.mode = "poor"`).
+struct StageCaches {
     edge: StageCache,
     regenerator: StageCache,
     pose: StageCache,
+    original: StageCache,
 }
+
+/// The record name of the pose pass over the original frames.
+const ORIGINAL_POSE: &str = "original-pose";
 
 /// Runs the pipeline on `opts.input` and writes the run folder.
 pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, PipelineError> {
@@ -60,6 +70,13 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let fps = config.input.fps.unwrap_or(info.fps);
     let ctx = StageContext::new(&opts.models_dir);
     let mut stages = registry::build(config, &ctx)?;
+    let names = stages.pose.keypoint_names();
+    let sel = &config.selection;
+    let poor_mode = sel.mode == SelectionMode::Poor;
+    if poor_mode {
+        // Unknown keypoint names fail before any frame is decoded.
+        selection::judge(&[], &names, sel).map_err(|e| PipelineError::config("[selection]", e))?;
+    }
     std::fs::create_dir_all(&opts.out).map_err(|e| {
         PipelineError::io(
             format!("creating the output folder {}", opts.out.display()),
@@ -79,23 +96,41 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         "regenerator",
         &(&config.regenerator, &regen_models),
     );
-    let pose_key = chain_key(&regen_key, "pose", &(&config.pose, &pose_models));
+    // A tracking estimator's result depends on the frames it saw before,
+    // so the pose key covers the stride and, with selective regeneration,
+    // the rule that picks the frames. Edge maps and regenerated images do
+    // not: changing the rule reuses every image already regenerated.
+    let pose_key = match sel.tracking_key() {
+        None => chain_key(&regen_key, "pose", &(&config.pose, &pose_models)),
+        Some(t) => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, &t)),
+    };
+    let original_key = chain_key(
+        &input_key,
+        ORIGINAL_POSE,
+        &(&config.pose, &pose_models, sel.stride),
+    );
     let caches = if config.run.cache {
         let root = config
             .run
             .cache_dir
             .clone()
             .unwrap_or_else(|| opts.out.join("cache"));
-        Caches {
+        StageCaches {
             edge: StageCache::open(&root, "edge", &edge_key, &config.edge)?,
             regenerator: StageCache::open(&root, "regenerator", &regen_key, &config.regenerator)?,
             pose: StageCache::open(&root, "pose", &pose_key, &config.pose)?,
+            original: if poor_mode {
+                StageCache::open(&root, ORIGINAL_POSE, &original_key, &config.pose)?
+            } else {
+                StageCache::disabled()
+            },
         }
     } else {
-        Caches {
+        StageCaches {
             edge: StageCache::disabled(),
             regenerator: StageCache::disabled(),
             pose: StageCache::disabled(),
+            original: StageCache::disabled(),
         }
     };
     let mut records: BTreeMap<String, StageRecord> = BTreeMap::new();
@@ -112,69 +147,144 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
             },
         );
     }
+    if poor_mode {
+        let kind = records["pose"].kind.clone();
+        records.insert(
+            ORIGINAL_POSE.to_string(),
+            StageRecord {
+                kind,
+                cache_key: original_key[..16].to_string(),
+                ..StageRecord::default()
+            },
+        );
+    }
 
-    let names = stages.pose.keypoint_names();
     let total = info.frames.map(|n| {
         let end = config.input.last_frame.map_or(n, |l| (l + 1).min(n));
         end.saturating_sub(config.input.first_frame)
     });
-    let bar = progress_bar(opts.progress, total);
-    let mut driver = Driver {
+    let first = config.input.first_frame;
+    let stride = sel.stride;
+    let grid = Order::Grid { first, stride };
+    let on_grid = |index: usize, last: bool| last || (index - first) % stride == 0;
+    let mut tools = Tools {
         config,
         stages: &mut stages,
-        caches: &caches,
         records: &mut records,
         n_keypoints: names.len(),
-        last_estimated: None,
-        from_cache: 0,
     };
-    let mut reader = info.frames()?;
-    let mut batch = Vec::with_capacity(config.run.batch_size);
-    let mut seq = PoseSequence {
-        fps,
-        names: names.clone(),
-        frames: Vec::new(),
-        poses: Vec::new(),
+
+    // Pass 1 (poor mode): poses on the original frames of the grid.
+    // Pass 2: the regeneration pass over the grid, or over the poor frames.
+    // The estimator starts each pass afresh and sees that pass's frames in
+    // order, tracking only between neighbours in the grid.
+    let mut record = SelectionRecord::default();
+    let (all, processed, from_cache, original) = if poor_mode {
+        let bar = progress_bar(opts.progress, total, "original frames");
+        let first_pass = tools.pass(&caches, &caches.original, false, grid);
+        let (all, original, cached_original) = first_pass.stream(&info, &bar, &on_grid)?;
+        bar.finish_and_clear();
+        let poses: Vec<Pose> = original.iter().map(|(_, p)| p.clone()).collect();
+        let verdict = selection::judge(&poses, &names, sel)
+            .map_err(|e| PipelineError::config("[selection]", e))?;
+        let poor: Vec<usize> = original
+            .iter()
+            .zip(&verdict.reasons)
+            .filter(|(_, r)| r.is_some())
+            .map(|((f, _), _)| *f)
+            .collect();
+        for ((f, _), reason) in original.iter().zip(&verdict.reasons) {
+            if let Some(r) = reason {
+                record.poor.entry(*r).or_default().push([*f, *f]);
+                *record.poor_counts.entry(*r).or_default() += 1;
+            }
+        }
+        for frames in record.poor.values_mut() {
+            *frames = selection::ranges(frames.iter().map(|r| r[0]));
+        }
+        record.segment_medians_px = Some(verdict.medians);
+        let mut regenerated: BTreeMap<usize, Pose> = BTreeMap::new();
+        let mut cached_regenerated = BTreeSet::new();
+        if !poor.is_empty() {
+            let wanted: BTreeSet<usize> = poor.iter().copied().collect();
+            let bar = progress_bar(opts.progress, total, "regenerating poor frames");
+            let order = Order::Subset {
+                frames: poor,
+                stride,
+            };
+            let second_pass = tools.pass(&caches, &caches.pose, true, order);
+            let (_, found, cached) =
+                second_pass.stream(&info, &bar, &|f, _| wanted.contains(&f))?;
+            bar.finish_and_clear();
+            regenerated.extend(found);
+            cached_regenerated = cached;
+        }
+        let mut from_cache = 0;
+        let processed: Vec<(usize, Pose)> = original
+            .iter()
+            .map(|(f, p)| match regenerated.remove(f) {
+                Some(r) => {
+                    from_cache += usize::from(cached_regenerated.contains(f));
+                    (*f, r)
+                }
+                None => {
+                    from_cache += usize::from(cached_original.contains(f));
+                    (*f, p.clone())
+                }
+            })
+            .collect();
+        (all, processed, from_cache, Some(original))
+    } else {
+        let bar = progress_bar(opts.progress, total, "");
+        let only_pass = tools.pass(&caches, &caches.pose, true, grid);
+        let (all, processed, cached) = only_pass.stream(&info, &bar, &on_grid)?;
+        bar.finish_and_clear();
+        (all, processed, cached.len(), None)
     };
-    loop {
-        let next = reader.next_frame()?;
-        let done = match &next {
-            None => true,
-            Some(f) => config.input.last_frame.is_some_and(|l| f.index > l),
-        };
-        if let Some(frame) = next.filter(|f| f.index >= config.input.first_frame && !done) {
-            batch.push(frame);
-        }
-        if batch.len() == config.run.batch_size || (done && !batch.is_empty()) {
-            let poses = driver.process(&batch)?;
-            bar.inc(batch.len() as u64);
-            seq.frames.extend(batch.iter().map(|f| f.index));
-            seq.poses.extend(poses);
-            batch.clear();
-        }
-        if done {
-            break;
-        }
-    }
-    bar.finish_and_clear();
-    drop(reader);
-    if seq.poses.is_empty() {
+    if all.is_empty() {
         return Err(PipelineError::input(
             &opts.input,
-            format!(
-                "no frames in the selected range (first_frame = {})",
-                config.input.first_frame
-            ),
+            format!("no frames in the selected range (first_frame = {first})"),
         ));
     }
-    let from_cache = driver.from_cache;
+    let (poses, interpolated) = interpolate::fill(&all, &processed, names.len());
+    let processed_frames: Vec<usize> = processed.iter().map(|(f, _)| *f).collect();
+    let poor_set: BTreeSet<usize> = record
+        .poor
+        .values()
+        .flat_map(|rs| rs.iter().flat_map(|r| r[0]..=r[1]))
+        .collect();
+    let (regenerated, kept): (Vec<usize>, Vec<usize>) = processed_frames
+        .iter()
+        .partition(|f| !poor_mode || poor_set.contains(f));
+    record.frames = all.len();
+    record.processed = selection::ranges(processed_frames.iter().copied());
+    record.regenerated_count = regenerated.len();
+    record.regenerated = selection::ranges(regenerated);
+    record.original_count = kept.len();
+    record.original = selection::ranges(kept);
+    record.interpolated_count = interpolated.len();
+    record.interpolated = selection::ranges(interpolated);
+    let seq = PoseSequence {
+        fps,
+        names: names.clone(),
+        frames: all,
+        poses,
+    };
 
-    let csv_path = opts.out.join("keypoints.csv");
     let scorer = format!("gait-{}", records["pose"].kind.replace('/', "-"));
-    atomic::write_with(&csv_path, |w| {
-        gait_core::dlc::write(w, &scorer, &seq).map_err(std::io::Error::other)
-    })
-    .map_err(|e| PipelineError::io(format!("writing {}", csv_path.display()), e))?;
+    write_csv(&opts.out.join("keypoints.csv"), &scorer, &seq)?;
+    if let Some(original) = original {
+        // The poses the poor-frame rule judged, for checking and comparing.
+        let (frames, poses) = original.into_iter().unzip();
+        let seq = PoseSequence {
+            fps,
+            names: names.clone(),
+            frames,
+            poses,
+        };
+        write_csv(&opts.out.join("keypoints_original.csv"), &scorer, &seq)?;
+    }
 
     let manifest = RunManifest {
         tool: "gait",
@@ -195,6 +305,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         stages: records,
         frames_processed: seq.poses.len(),
         frames_from_cache: from_cache,
+        selection: record,
         keypoint_names: names,
         warnings: Vec::new(),
         extra: BTreeMap::new(),
@@ -223,7 +334,51 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     Ok(summary)
 }
 
-fn progress_bar(enabled: bool, total: Option<usize>) -> ProgressBar {
+fn write_csv(path: &Path, scorer: &str, seq: &PoseSequence) -> Result<(), PipelineError> {
+    atomic::write_with(path, |w| {
+        gait_core::dlc::write(w, scorer, seq).map_err(std::io::Error::other)
+    })
+    .map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))
+}
+
+/// What every pass shares: the stages and the per-stage records.
+struct Tools<'a> {
+    config: &'a PipelineConfig,
+    stages: &'a mut Stages,
+    records: &'a mut BTreeMap<String, StageRecord>,
+    n_keypoints: usize,
+}
+
+impl<'t> Tools<'t> {
+    /// A driver for one pass: `regenerate` = through edges and regenerator
+    /// into `pose_cache`, else the original frames into it.
+    fn pass<'a>(
+        &'a mut self,
+        caches: &'a StageCaches,
+        pose_cache: &'a StageCache,
+        regenerate: bool,
+        order: Order,
+    ) -> Driver<'a> {
+        Driver {
+            config: self.config,
+            stages: self.stages,
+            caches: Caches {
+                edge: &caches.edge,
+                regenerator: &caches.regenerator,
+                pose: pose_cache,
+            },
+            records: self.records,
+            n_keypoints: self.n_keypoints,
+            regenerate,
+            pose_record: if regenerate { "pose" } else { ORIGINAL_POSE },
+            order,
+            last_estimated: None,
+            cached_frames: BTreeSet::new(),
+        }
+    }
+}
+
+fn progress_bar(enabled: bool, total: Option<usize>, pass: &str) -> ProgressBar {
     if !enabled {
         return ProgressBar::hidden();
     }
@@ -232,226 +387,11 @@ fn progress_bar(enabled: bool, total: Option<usize>) -> ProgressBar {
         None => ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr()),
     };
     let style = ProgressStyle::with_template(
-        "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} frames {per_sec} ETA {eta}",
+        "{spinner} [{elapsed_precise}] {msg} {wide_bar} {pos}/{len} frames {per_sec} ETA {eta}",
     )
     .unwrap_or_else(|_| ProgressStyle::default_bar());
     bar.set_style(style);
+    bar.set_message(pass.to_string());
     bar
 }
 
-/// Processes batches, taking each stage's results from the cache when it can.
-struct Driver<'a> {
-    config: &'a PipelineConfig,
-    stages: &'a mut Stages,
-    caches: &'a Caches,
-    records: &'a mut BTreeMap<String, StageRecord>,
-    n_keypoints: usize,
-    /// Index of the last frame the pose stage saw, to reset trackers on gaps.
-    last_estimated: Option<usize>,
-    from_cache: usize,
-}
-
-impl Driver<'_> {
-    fn record(&mut self, stage: &str) -> &mut StageRecord {
-        self.records.entry(stage.to_string()).or_default()
-    }
-
-    fn process(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, PipelineError> {
-        let mut poses: Vec<Option<Pose>> = frames
-            .iter()
-            .map(|f| self.caches.pose.load_pose(f.index, self.n_keypoints))
-            .collect();
-        let cached = poses.iter().filter(|p| p.is_some()).count();
-        self.from_cache += cached;
-        self.record("pose").cached += cached;
-        let todo: Vec<&Frame> = frames
-            .iter()
-            .zip(&poses)
-            .filter(|(_, p)| p.is_none())
-            .map(|(f, _)| f)
-            .collect();
-        if !todo.is_empty() {
-            let redrawn = self.regenerated(&todo)?;
-            // The pose stage may track across frames: hand it contiguous runs
-            // and reset it where the sequence jumps (frames taken from cache).
-            let mut start = 0;
-            while start < redrawn.len() {
-                let mut end = start + 1;
-                while end < redrawn.len() && redrawn[end].index == redrawn[end - 1].index + 1 {
-                    end += 1;
-                }
-                let run = &redrawn[start..end];
-                if self.last_estimated.is_none_or(|l| l + 1 != run[0].index) {
-                    // Resuming: restore the tracker as it was after the
-                    // previous frame, so results equal an uninterrupted run.
-                    let saved = run[0]
-                        .index
-                        .checked_sub(1)
-                        .and_then(|p| self.caches.pose.load_state(p));
-                    if !saved.is_some_and(|s| self.stages.pose.restore(&s)) {
-                        self.stages.pose.reset();
-                    }
-                }
-                // A stateful estimator goes frame by frame so that its state
-                // after every frame can be saved with that frame's pose.
-                let step = if self.stages.pose.state().is_some() {
-                    1
-                } else {
-                    run.len()
-                };
-                for chunk in run.chunks(step) {
-                    let t = Instant::now();
-                    let found = self.stages.pose.estimate(chunk)?;
-                    self.record("pose").seconds += t.elapsed().as_secs_f64();
-                    self.record("pose").computed += chunk.len();
-                    if found.len() != chunk.len()
-                        || found.iter().any(|p| p.keypoints.len() != self.n_keypoints)
-                    {
-                        return Err(bad_output(
-                            "pose",
-                            "a pose per frame with one entry per keypoint name",
-                        ));
-                    }
-                    let state = self.stages.pose.state();
-                    for (frame, pose) in chunk.iter().zip(found) {
-                        // State first: a pose on disk always has its state beside it.
-                        if let Some(s) = &state {
-                            self.caches.pose.store_state(frame.index, s)?;
-                        }
-                        self.caches.pose.store_pose(frame.index, &pose)?;
-                        let slot = frames
-                            .iter()
-                            .position(|f| f.index == frame.index)
-                            .unwrap_or(0);
-                        poses[slot] = Some(pose);
-                    }
-                }
-                self.last_estimated = Some(run[run.len() - 1].index);
-                start = end;
-            }
-        }
-        Ok(poses
-            .into_iter()
-            .map(|p| p.unwrap_or_else(|| Pose::empty(self.n_keypoints)))
-            .collect())
-    }
-
-    /// The frames the pose model should see: regenerated (or cached) ones.
-    fn regenerated(&mut self, frames: &[&Frame]) -> Result<Vec<Frame>, PipelineError> {
-        let identity = self.config.regenerator.is_identity();
-        let mut out: Vec<Option<Frame>> = frames
-            .iter()
-            .map(|f| {
-                self.caches
-                    .regenerator
-                    .load_rgb(f.index)
-                    .filter(|img| img.dimensions() == f.image.dimensions() && !identity)
-                    .map(|img| Frame::new(f.index, img))
-            })
-            .collect();
-        let cached = out.iter().filter(|f| f.is_some()).count();
-        self.record("regenerator").cached += cached;
-        let todo: Vec<Frame> = frames
-            .iter()
-            .zip(&out)
-            .filter(|(_, o)| o.is_none())
-            .map(|(f, _)| (*f).clone())
-            .collect();
-        if todo.is_empty() {
-            return Ok(out.into_iter().flatten().collect());
-        }
-        let edges = self.edges(&todo)?;
-        let t = Instant::now();
-        let redrawn = self
-            .stages
-            .regenerator
-            .regenerate(&todo, edges.as_deref())?;
-        self.record("regenerator").seconds += t.elapsed().as_secs_f64();
-        self.record("regenerator").computed += todo.len();
-        if redrawn.len() != todo.len()
-            || redrawn
-                .iter()
-                .zip(&todo)
-                .any(|(r, f)| r.index != f.index || r.image.dimensions() != f.image.dimensions())
-        {
-            return Err(bad_output(
-                "regenerator",
-                "one frame per input frame, with its index and size",
-            ));
-        }
-        let mut redrawn = redrawn.into_iter();
-        for slot in out.iter_mut().filter(|o| o.is_none()) {
-            let frame = redrawn
-                .next()
-                .ok_or_else(|| bad_output("regenerator", "one frame per input frame"))?;
-            if !identity {
-                self.caches
-                    .regenerator
-                    .store_rgb(frame.index, &frame.image)?;
-            }
-            *slot = Some(frame);
-        }
-        Ok(out.into_iter().flatten().collect())
-    }
-
-    /// Edge maps for `frames`, or `None` when the pipeline has no edge stage.
-    fn edges(&mut self, frames: &[Frame]) -> Result<Option<Vec<EdgeMap>>, PipelineError> {
-        if self.stages.edge.is_none() {
-            return Ok(None);
-        }
-        let mut maps: Vec<Option<EdgeMap>> = frames
-            .iter()
-            .map(|f| {
-                self.caches
-                    .edge
-                    .load_edge(f.index)
-                    .map(|(image, resize)| EdgeMap {
-                        index: f.index,
-                        image,
-                        resize,
-                    })
-            })
-            .collect();
-        let cached = maps.iter().filter(|m| m.is_some()).count();
-        self.record("edge").cached += cached;
-        let todo: Vec<Frame> = frames
-            .iter()
-            .zip(&maps)
-            .filter(|(_, m)| m.is_none())
-            .map(|(f, _)| f.clone())
-            .collect();
-        if !todo.is_empty() {
-            let t = Instant::now();
-            let detector = self
-                .stages
-                .edge
-                .as_mut()
-                .ok_or_else(|| bad_output("edge", "a detector"))?;
-            let found = detector.detect(&todo)?;
-            self.record("edge").seconds += t.elapsed().as_secs_f64();
-            self.record("edge").computed += todo.len();
-            if found.len() != todo.len() || found.iter().zip(&todo).any(|(m, f)| m.index != f.index)
-            {
-                return Err(bad_output("edge", "one edge map per frame, with its index"));
-            }
-            let mut found = found.into_iter();
-            for slot in maps.iter_mut().filter(|m| m.is_none()) {
-                let map = found
-                    .next()
-                    .ok_or_else(|| bad_output("edge", "one edge map per frame"))?;
-                self.caches
-                    .edge
-                    .store_edge(map.index, &map.image, &map.resize)?;
-                *slot = Some(map);
-            }
-        }
-        Ok(Some(maps.into_iter().flatten().collect()))
-    }
-}
-
-fn bad_output(stage: &str, expected: &str) -> PipelineError {
-    PipelineError::Stage(gait_core::StageError::backend(
-        stage,
-        format!("the {stage} stage returned malformed results (expected {expected})"),
-    ))
-}

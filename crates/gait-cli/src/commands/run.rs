@@ -27,6 +27,9 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     for w in &summary.manifest.warnings {
         eprintln!("warning: {w}");
     }
+    if !config.selection.is_default_flow() {
+        eprintln!("{}", summary.manifest.selection.summary());
+    }
     // The report reads what the run wrote, so it shows exactly the files a
     // reader of the run folder gets.
     let side = match config.kinematics.prosthetic_side {

@@ -1,0 +1,381 @@
+//! Drives frames through the stages, taking each stage's results from the
+//! cache when it can, and keeps a tracking pose estimator's state consistent
+//! with the order in which it sees frames.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::time::Instant;
+
+use gait_core::{EdgeMap, Frame, Pose};
+use indicatif::ProgressBar;
+
+use crate::cache::StageCache;
+use crate::input::InputInfo;
+use crate::manifest::StageRecord;
+use crate::registry::Stages;
+use crate::{PipelineConfig, PipelineError};
+
+/// The frames one pass hands the pose estimator, and which of them follow
+/// each other closely enough for a tracker to carry over. The estimator
+/// tracks from a frame's predecessor; where there is none it starts afresh.
+#[derive(Debug, Clone)]
+pub(crate) enum Order {
+    /// `first`, `first + stride`, ... and the last frame of the range.
+    Grid { first: usize, stride: usize },
+    /// A sorted subset of the grid (the poor frames): consecutive members
+    /// at most `stride` apart are neighbours in the grid and track.
+    Subset { frames: Vec<usize>, stride: usize },
+}
+
+impl Order {
+    /// The frame the estimator saw just before `frame` and tracks from.
+    pub(crate) fn previous(&self, frame: usize) -> Option<usize> {
+        match self {
+            Order::Grid { first, stride } => {
+                if frame <= *first {
+                    None
+                } else {
+                    // Grid frames step back by `stride`; the extra last
+                    // frame steps back to the grid frame below it.
+                    Some(first + (frame - 1 - first) / stride * stride)
+                }
+            }
+            Order::Subset { frames, stride } => {
+                let at = frames.binary_search(&frame).ok()?;
+                let prev = *frames.get(at.checked_sub(1)?)?;
+                (frame - prev <= *stride).then_some(prev)
+            }
+        }
+    }
+}
+
+/// Stage caches of one pass.
+pub(crate) struct Caches<'a> {
+    pub(crate) edge: &'a StageCache,
+    pub(crate) regenerator: &'a StageCache,
+    pub(crate) pose: &'a StageCache,
+}
+
+/// Processes batches, taking each stage's results from the cache when it can.
+pub(crate) struct Driver<'a> {
+    pub(crate) config: &'a PipelineConfig,
+    pub(crate) stages: &'a mut Stages,
+    pub(crate) caches: Caches<'a>,
+    pub(crate) records: &'a mut BTreeMap<String, StageRecord>,
+    pub(crate) n_keypoints: usize,
+    /// False for the pass over the original frames (straight to pose).
+    pub(crate) regenerate: bool,
+    /// The stage record the pose results count under.
+    pub(crate) pose_record: &'static str,
+    pub(crate) order: Order,
+    /// Index of the last frame the pose stage saw, to reset trackers on gaps.
+    pub(crate) last_estimated: Option<usize>,
+    /// Frames whose pose came from the cache.
+    pub(crate) cached_frames: BTreeSet<usize>,
+}
+
+impl Driver<'_> {
+    fn record(&mut self, stage: &str) -> &mut StageRecord {
+        self.records.entry(stage.to_string()).or_default()
+    }
+
+    /// Poses of `frames` (consecutive members of the pass's order).
+    pub(crate) fn process(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, PipelineError> {
+        let record = self.pose_record;
+        let mut poses: Vec<Option<Pose>> = frames
+            .iter()
+            .map(|f| self.caches.pose.load_pose(f.index, self.n_keypoints))
+            .collect();
+        let cached: Vec<usize> = frames
+            .iter()
+            .zip(&poses)
+            .filter(|(_, p)| p.is_some())
+            .map(|(f, _)| f.index)
+            .collect();
+        self.record(record).cached += cached.len();
+        self.cached_frames.extend(cached);
+        let todo: Vec<&Frame> = frames
+            .iter()
+            .zip(&poses)
+            .filter(|(_, p)| p.is_none())
+            .map(|(f, _)| f)
+            .collect();
+        if !todo.is_empty() {
+            let seen = if self.regenerate {
+                self.regenerated(&todo)?
+            } else {
+                todo.into_iter().cloned().collect()
+            };
+            // The pose stage may track across frames: hand it runs that
+            // follow each other in the pass's order, and restore or reset it
+            // where the run does not continue the last frame it saw.
+            let mut start = 0;
+            while start < seen.len() {
+                let mut end = start + 1;
+                while end < seen.len()
+                    && self.order.previous(seen[end].index) == Some(seen[end - 1].index)
+                {
+                    end += 1;
+                }
+                let run = &seen[start..end];
+                let previous = self.order.previous(run[0].index);
+                if previous.is_none() || self.last_estimated != previous {
+                    // Resuming: restore the tracker as it was after the
+                    // previous frame, so results equal an uninterrupted run.
+                    let saved = previous.and_then(|p| self.caches.pose.load_state(p));
+                    if !saved.is_some_and(|s| self.stages.pose.restore(&s)) {
+                        self.stages.pose.reset();
+                    }
+                }
+                // A stateful estimator goes frame by frame so that its state
+                // after every frame can be saved with that frame's pose.
+                let step = if self.stages.pose.state().is_some() {
+                    1
+                } else {
+                    run.len()
+                };
+                for chunk in run.chunks(step) {
+                    let t = Instant::now();
+                    let found = self.stages.pose.estimate(chunk)?;
+                    self.record(record).seconds += t.elapsed().as_secs_f64();
+                    self.record(record).computed += chunk.len();
+                    if found.len() != chunk.len()
+                        || found.iter().any(|p| p.keypoints.len() != self.n_keypoints)
+                    {
+                        return Err(bad_output(
+                            "pose",
+                            "a pose per frame with one entry per keypoint name",
+                        ));
+                    }
+                    let state = self.stages.pose.state();
+                    for (frame, pose) in chunk.iter().zip(found) {
+                        // State first: a pose on disk always has its state beside it.
+                        if let Some(s) = &state {
+                            self.caches.pose.store_state(frame.index, s)?;
+                        }
+                        self.caches.pose.store_pose(frame.index, &pose)?;
+                        let slot = frames
+                            .iter()
+                            .position(|f| f.index == frame.index)
+                            .unwrap_or(0);
+                        poses[slot] = Some(pose);
+                    }
+                }
+                self.last_estimated = Some(run[run.len() - 1].index);
+                start = end;
+            }
+        }
+        Ok(poses
+            .into_iter()
+            .map(|p| p.unwrap_or_else(|| Pose::empty(self.n_keypoints)))
+            .collect())
+    }
+
+    /// The frames the pose model should see: regenerated (or cached) ones.
+    fn regenerated(&mut self, frames: &[&Frame]) -> Result<Vec<Frame>, PipelineError> {
+        let identity = self.config.regenerator.is_identity();
+        let mut out: Vec<Option<Frame>> = frames
+            .iter()
+            .map(|f| {
+                self.caches
+                    .regenerator
+                    .load_rgb(f.index)
+                    .filter(|img| img.dimensions() == f.image.dimensions() && !identity)
+                    .map(|img| Frame::new(f.index, img))
+            })
+            .collect();
+        let cached = out.iter().filter(|f| f.is_some()).count();
+        self.record("regenerator").cached += cached;
+        let todo: Vec<Frame> = frames
+            .iter()
+            .zip(&out)
+            .filter(|(_, o)| o.is_none())
+            .map(|(f, _)| (*f).clone())
+            .collect();
+        if todo.is_empty() {
+            return Ok(out.into_iter().flatten().collect());
+        }
+        let edges = self.edges(&todo)?;
+        let t = Instant::now();
+        let redrawn = self
+            .stages
+            .regenerator
+            .regenerate(&todo, edges.as_deref())?;
+        self.record("regenerator").seconds += t.elapsed().as_secs_f64();
+        self.record("regenerator").computed += todo.len();
+        if redrawn.len() != todo.len()
+            || redrawn
+                .iter()
+                .zip(&todo)
+                .any(|(r, f)| r.index != f.index || r.image.dimensions() != f.image.dimensions())
+        {
+            return Err(bad_output(
+                "regenerator",
+                "one frame per input frame, with its index and size",
+            ));
+        }
+        let mut redrawn = redrawn.into_iter();
+        for slot in out.iter_mut().filter(|o| o.is_none()) {
+            let frame = redrawn
+                .next()
+                .ok_or_else(|| bad_output("regenerator", "one frame per input frame"))?;
+            if !identity {
+                self.caches
+                    .regenerator
+                    .store_rgb(frame.index, &frame.image)?;
+            }
+            *slot = Some(frame);
+        }
+        Ok(out.into_iter().flatten().collect())
+    }
+
+    /// Edge maps for `frames`, or `None` when the pipeline has no edge stage.
+    fn edges(&mut self, frames: &[Frame]) -> Result<Option<Vec<EdgeMap>>, PipelineError> {
+        if self.stages.edge.is_none() {
+            return Ok(None);
+        }
+        let mut maps: Vec<Option<EdgeMap>> = frames
+            .iter()
+            .map(|f| {
+                self.caches
+                    .edge
+                    .load_edge(f.index)
+                    .map(|(image, resize)| EdgeMap {
+                        index: f.index,
+                        image,
+                        resize,
+                    })
+            })
+            .collect();
+        let cached = maps.iter().filter(|m| m.is_some()).count();
+        self.record("edge").cached += cached;
+        let todo: Vec<Frame> = frames
+            .iter()
+            .zip(&maps)
+            .filter(|(_, m)| m.is_none())
+            .map(|(f, _)| f.clone())
+            .collect();
+        if !todo.is_empty() {
+            let t = Instant::now();
+            let detector = self
+                .stages
+                .edge
+                .as_mut()
+                .ok_or_else(|| bad_output("edge", "a detector"))?;
+            let found = detector.detect(&todo)?;
+            self.record("edge").seconds += t.elapsed().as_secs_f64();
+            self.record("edge").computed += todo.len();
+            if found.len() != todo.len() || found.iter().zip(&todo).any(|(m, f)| m.index != f.index)
+            {
+                return Err(bad_output("edge", "one edge map per frame, with its index"));
+            }
+            let mut found = found.into_iter();
+            for slot in maps.iter_mut().filter(|m| m.is_none()) {
+                let map = found
+                    .next()
+                    .ok_or_else(|| bad_output("edge", "one edge map per frame"))?;
+                self.caches
+                    .edge
+                    .store_edge(map.index, &map.image, &map.resize)?;
+                *slot = Some(map);
+            }
+        }
+        Ok(Some(maps.into_iter().flatten().collect()))
+    }
+}
+
+/// A pass's result: every frame index of the range, the poses of the frames
+/// it processed, and those of them that came from the cache.
+type PassResult = (Vec<usize>, Vec<(usize, Pose)>, BTreeSet<usize>);
+
+impl Driver<'_> {
+    /// Decodes the configured range and hands the frames `pick(index,
+    /// is_last)` chooses to the stages in batches.
+    pub(crate) fn stream(
+        mut self,
+        info: &InputInfo,
+        bar: &ProgressBar,
+        pick: &dyn Fn(usize, bool) -> bool,
+    ) -> Result<PassResult, PipelineError> {
+        let (first, last) = (self.config.input.first_frame, self.config.input.last_frame);
+        let batch_size = self.config.run.batch_size;
+        let mut reader = info.frames()?;
+        let mut all = Vec::new();
+        let mut out = Vec::new();
+        let mut batch = Vec::with_capacity(batch_size);
+        // One frame of look-ahead tells whether a frame is the range's last.
+        let mut ahead = reader.next_frame()?;
+        while let Some(frame) = ahead.take() {
+            if last.is_some_and(|l| frame.index > l) {
+                break;
+            }
+            ahead = if last == Some(frame.index) {
+                None
+            } else {
+                reader.next_frame()?
+            };
+            if frame.index < first {
+                continue;
+            }
+            let is_last = ahead.is_none();
+            bar.inc(1);
+            all.push(frame.index);
+            if pick(frame.index, is_last) {
+                batch.push(frame);
+            }
+            if batch.len() == batch_size || (is_last && !batch.is_empty()) {
+                let poses = self.process(&batch)?;
+                out.extend(batch.iter().map(|f| f.index).zip(poses));
+                batch.clear();
+            }
+            if is_last {
+                break;
+            }
+        }
+        Ok((all, out, self.cached_frames))
+    }
+}
+
+fn bad_output(stage: &str, expected: &str) -> PipelineError {
+    PipelineError::Stage(gait_core::StageError::backend(
+        stage,
+        format!("the {stage} stage returned malformed results (expected {expected})"),
+    ))
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_frames_track_from_the_grid_frame_before() {
+        let g = Order::Grid {
+            first: 10,
+            stride: 3,
+        };
+        assert_eq!(g.previous(10), None);
+        assert_eq!(g.previous(13), Some(10));
+        assert_eq!(g.previous(16), Some(13));
+        // The range's last frame, off the grid, follows the grid frame below.
+        assert_eq!(g.previous(18), Some(16));
+        let every = Order::Grid {
+            first: 0,
+            stride: 1,
+        };
+        assert_eq!(every.previous(5), Some(4));
+    }
+
+    #[test]
+    fn a_subset_tracks_only_across_grid_neighbours() {
+        let s = Order::Subset {
+            frames: vec![3, 6, 12, 13],
+            stride: 3,
+        };
+        assert_eq!(s.previous(3), None);
+        assert_eq!(s.previous(6), Some(3));
+        // 9 was good: 12 starts afresh.
+        assert_eq!(s.previous(12), None);
+        assert_eq!(s.previous(13), Some(12));
+        assert_eq!(s.previous(7), None);
+    }
+}
