@@ -4,12 +4,16 @@
 Needs: Python 3.11 with torch (2.x, CPU is enough), controlnet-aux==0.0.10, onnx==1.23.2.
 Usage (from the repository root):
     python tools/openpose/export_onnx.py body_pose_model.pth openpose_coco18.onnx
-then in the pipeline config: `[pose] kind = "openpose", backend = "ort", model_file = "openpose_coco18.onnx"`.
+then in the pipeline config: `[pose]` with `kind = "openpose"`, `backend = "ort"`, `model_path = "openpose_coco18.onnx"`.
 
 The graph has one input `image` (1x3xHxW, BGR, pixel/256 - 0.5, H and W dynamic, multiples of 8) and two outputs
 `paf` (38 channels, stage-6 L1) and `heatmap` (19 channels, stage-6 L2), both at stride 8. The checkpoint's keys
 are the model's state_dict keys without their first component (`conv1_1.weight` for `model0.conv1_1.weight`), the
 same mapping controlnet_aux's `util.transfer` does.
+
+BODY_25 has no PyTorch checkpoint: convert OpenPose's caffe model (pose/body_25) to ONNX with a caffe converter; its
+single output (26 heatmaps then 52 PAFs, the caffe net's `net_output`) is what gait's ort backend expects with
+`model = "body_25"`.
 
 The fixture script (make_net_fixtures.py) uses `export` below on the same model class with synthetic weights.
 """
