@@ -26,13 +26,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut model = net::candle_from_tensors(tensors)?;
     let (h, w) = (368, 368);
     // Same pattern as bench_net.py.
-    let data = (0..3 * h * w).map(|i| ((i * 7919) % 256) as f32 / 256.0 - 0.5).collect();
-    let input = NetInput { data, height: h, width: w };
+    let data = (0..3 * h * w)
+        .map(|i| ((i * 7919) % 256) as f32 / 256.0 - 0.5)
+        .collect();
+    let input = NetInput {
+        data,
+        height: h,
+        width: w,
+    };
     model.run(&input)?; // warm-up
     let t = Instant::now();
     for _ in 0..rounds {
         model.run(&input)?;
     }
-    println!("candle_ms {:.1}", t.elapsed().as_secs_f64() * 1000.0 / rounds as f64);
+    println!(
+        "candle_ms {:.1}",
+        t.elapsed().as_secs_f64() * 1000.0 / rounds as f64
+    );
     Ok(())
 }

@@ -44,7 +44,11 @@ fn manifest(file: &str) -> Vec<(String, String, Vec<usize>)> {
         .unwrap()
         .iter()
         .map(|e| {
-            let shape = e["shape"].as_array().unwrap().iter().map(|d| d.as_u64().unwrap() as usize);
+            let shape = e["shape"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|d| d.as_u64().unwrap() as usize);
             (
                 e["name"].as_str().unwrap().to_string(),
                 e["torch"].as_str().unwrap().to_string(),
@@ -69,29 +73,45 @@ fn input() -> NetInput {
             data[c * h * w + p] = px[c] as f32 / 256.0 - 0.5;
         }
     }
-    NetInput { data, height: h, width: w }
+    NetInput {
+        data,
+        height: h,
+        width: w,
+    }
 }
 
 fn rel_err(ours: &[f32], reference: &[f32]) -> f32 {
     assert_eq!(ours.len(), reference.len());
     let max_ref = reference.iter().fold(0f32, |m, v| m.max(v.abs()));
     assert!(max_ref > 0.0, "reference output is all zeros");
-    let max_diff = ours.iter().zip(reference).fold(0f32, |m, (a, b)| m.max((a - b).abs()));
+    let max_diff = ours
+        .iter()
+        .zip(reference)
+        .fold(0f32, |m, (a, b)| m.max((a - b).abs()));
     max_diff / max_ref
 }
 
 /// Compares a network output with the torch fixture of `case`.
 fn check(out: &NetOutput, case: &str) {
     let c = &json("cases.json")[case];
-    let (nh, np) = (c["heatmap_channels"].as_u64().unwrap() as usize, c["paf_channels"].as_u64().unwrap() as usize);
-    let (h, w) = (c["height"].as_u64().unwrap() as usize, c["width"].as_u64().unwrap() as usize);
+    let (nh, np) = (
+        c["heatmap_channels"].as_u64().unwrap() as usize,
+        c["paf_channels"].as_u64().unwrap() as usize,
+    );
+    let (h, w) = (
+        c["height"].as_u64().unwrap() as usize,
+        c["width"].as_u64().unwrap() as usize,
+    );
     assert_eq!((out.height, out.width), (h, w));
     let reference = floats(c["output"].as_str().unwrap());
     let (heat, paf) = reference.split_at(nh * h * w);
     assert_eq!(paf.len(), np * h * w);
     let (eh, ep) = (rel_err(&out.heatmaps, heat), rel_err(&out.pafs, paf));
     println!("{case}: heatmaps max rel err {eh:.2e}, PAFs {ep:.2e}");
-    assert!(eh <= TOLERANCE && ep <= TOLERANCE, "{case}: heatmaps {eh:.2e}, PAFs {ep:.2e}");
+    assert!(
+        eh <= TOLERANCE && ep <= TOLERANCE,
+        "{case}: heatmaps {eh:.2e}, PAFs {ep:.2e}"
+    );
 }
 
 fn coco18_tensors() -> HashMap<String, Tensor> {
@@ -112,7 +132,11 @@ fn coco18_cheap() -> HashMap<String, Tensor> {
     manifest("coco18_manifest.json")
         .into_iter()
         .map(|(name, _, shape)| {
-            let t = zero.reshape(vec![1; shape.len()]).unwrap().broadcast_as(shape).unwrap();
+            let t = zero
+                .reshape(vec![1; shape.len()])
+                .unwrap()
+                .broadcast_as(shape)
+                .unwrap();
             (name, t)
         })
         .collect()
@@ -121,15 +145,21 @@ fn coco18_cheap() -> HashMap<String, Tensor> {
 #[test]
 fn loader_asks_for_exactly_the_checkpoint_layout() {
     let layout = net::coco18_layout();
-    let manifest: Vec<(String, Vec<usize>)> =
-        manifest("coco18_manifest.json").into_iter().map(|(n, _, s)| (n, s)).collect();
+    let manifest: Vec<(String, Vec<usize>)> = manifest("coco18_manifest.json")
+        .into_iter()
+        .map(|(n, _, s)| (n, s))
+        .collect();
     assert_eq!(layout, manifest);
     assert!(net::candle_from_tensors(coco18_cheap()).is_ok());
 }
 
 #[test]
 fn loader_names_missing_misshaped_and_unknown_tensors() {
-    for name in ["conv1_1.weight", "conv4_4_CPM.bias", "Mconv7_stage6_L2.weight"] {
+    for name in [
+        "conv1_1.weight",
+        "conv4_4_CPM.bias",
+        "Mconv7_stage6_L2.weight",
+    ] {
         let mut t = coco18_cheap();
         t.remove(name);
         let e = net::candle_from_tensors(t).err().unwrap();
@@ -137,11 +167,20 @@ fn loader_names_missing_misshaped_and_unknown_tensors() {
         assert!(e.to_string().contains(name), "{e}");
     }
     let mut t = coco18_cheap();
-    t.insert("Mconv3_stage4_L1.weight".into(), Tensor::zeros((128, 128, 3, 3), candle_core::DType::F32, &Device::Cpu).unwrap());
+    t.insert(
+        "Mconv3_stage4_L1.weight".into(),
+        Tensor::zeros((128, 128, 3, 3), candle_core::DType::F32, &Device::Cpu).unwrap(),
+    );
     let e = net::candle_from_tensors(t).err().unwrap().to_string();
-    assert!(e.contains("Mconv3_stage4_L1.weight") && e.contains("[128, 128, 7, 7]"), "{e}");
+    assert!(
+        e.contains("Mconv3_stage4_L1.weight") && e.contains("[128, 128, 7, 7]"),
+        "{e}"
+    );
     let mut t = coco18_cheap();
-    t.insert("conv5_1.weight".into(), Tensor::zeros(3, candle_core::DType::F32, &Device::Cpu).unwrap());
+    t.insert(
+        "conv5_1.weight".into(),
+        Tensor::zeros(3, candle_core::DType::F32, &Device::Cpu).unwrap(),
+    );
     let e = net::candle_from_tensors(t).err().unwrap().to_string();
     assert!(e.contains("conv5_1.weight"), "{e}");
 }
@@ -156,7 +195,10 @@ fn pth_reader_reads_torch_zip_and_legacy_files() {
         let tensors = net::read_checkpoint(&dir().join(file)).unwrap();
         assert_eq!(tensors.len(), picks.len(), "{file}");
         for p in &picks {
-            let (name, k) = (p["name"].as_str().unwrap(), p["tensor"].as_u64().unwrap() as usize);
+            let (name, k) = (
+                p["name"].as_str().unwrap(),
+                p["tensor"].as_u64().unwrap() as usize,
+            );
             let (mname, torch, shape) = &manifest[k];
             assert_eq!(mname, name);
             let t = &tensors[name];
@@ -166,7 +208,10 @@ fn pth_reader_reads_torch_zip_and_legacy_files() {
             assert_eq!(got, want, "{file} {name}");
         }
         // Loading it as the model fails on the first tensor it lacks, naming it and the file.
-        let e = net::load(&dir().join(file), OpenposeModel::Coco18, Backend::Candle).err().unwrap().to_string();
+        let e = net::load(&dir().join(file), OpenposeModel::Coco18, Backend::Candle)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(e.contains("conv1_2.weight") && e.contains(file), "{e}");
     }
 }
@@ -181,8 +226,14 @@ fn safetensors_with_the_same_names_load() {
     check(&model.run(&input()).unwrap(), "coco18");
     t.remove("conv3_2.bias");
     candle_core::safetensors::save(&t, &path).unwrap();
-    let e = net::load(&path, OpenposeModel::Coco18, Backend::Candle).err().unwrap().to_string();
-    assert!(e.contains("conv3_2.bias") && e.contains("body.safetensors"), "{e}");
+    let e = net::load(&path, OpenposeModel::Coco18, Backend::Candle)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("conv3_2.bias") && e.contains("body.safetensors"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -190,13 +241,24 @@ fn candle_coco18_matches_controlnet_aux() {
     let mut model = net::candle_from_tensors(coco18_tensors()).unwrap();
     assert_eq!(model.model(), OpenposeModel::Coco18);
     check(&model.run(&input()).unwrap(), "coco18");
-    let bad = NetInput { data: vec![0.0; 3 * 12 * 16], height: 12, width: 16 };
+    let bad = NetInput {
+        data: vec![0.0; 3 * 12 * 16],
+        height: 12,
+        width: 16,
+    };
     assert!(model.run(&bad).is_err());
 }
 
 #[test]
 fn candle_refuses_body25() {
-    let e = net::load(&dir().join("tiny_zip.pth"), OpenposeModel::Body25, Backend::Candle).err().unwrap().to_string();
+    let e = net::load(
+        &dir().join("tiny_zip.pth"),
+        OpenposeModel::Body25,
+        Backend::Candle,
+    )
+    .err()
+    .unwrap()
+    .to_string();
     assert!(e.contains("ort") && e.contains("ONNX"), "{e}");
 }
 
@@ -215,7 +277,10 @@ fn rebuild_onnx(name: &str, manifest_file: &str) -> (tempfile::TempDir, PathBuf)
     let mut blob = vec![0u8; side["file_length"].as_u64().unwrap() as usize];
     for e in side["initializers"].as_array().unwrap() {
         let k = e["tensor"].as_u64().unwrap() as usize;
-        let (off, len) = (e["offset"].as_u64().unwrap() as usize, e["length"].as_u64().unwrap() as usize);
+        let (off, len) = (
+            e["offset"].as_u64().unwrap() as usize,
+            e["length"].as_u64().unwrap() as usize,
+        );
         let (_, torch, shape) = &manifest[k];
         assert_eq!(len, 4 * shape.iter().product::<usize>(), "{}", e["name"]);
         let v = synthetic::values(k, len / 4, synthetic::scale(torch, shape));
