@@ -1,36 +1,65 @@
 #!/usr/bin/env python3
-"""CPU benchmark: one guided denoising step (ControlNet + UNet, batch 2) at SD 1.5
-size, diffusers/torch vs our candle code, with the same random weights, in one run.
+"""CPU benchmark: one guided denoising step (ControlNet + UNet, batch 2) at SD 1.5 size,
+diffusers/torch vs our code on candle and on ONNX Runtime, with the same random weights,
+in one run.
 
-Needs: torch==2.15.0 diffusers==0.42.1 safetensors (Python 3.11), and a release build of
-the example: CARGO_TARGET_DIR=... cargo build --release -p gait-diffuse --example bench_step
-Run:   python tools/diffuse/bench_step.py --bin $CARGO_TARGET_DIR/release/examples/bench_step
-Prints seconds per step for each and the ratio, and each process's peak RSS.
+Needs: torch==2.15.0 diffusers==0.42.1 safetensors onnx==1.23.2 (Python 3.11), the ONNX
+Runtime library (ORT_DYLIB_PATH, from the PyPI onnxruntime==1.31.1 wheel) for the ort side,
+and a build of the example:
+  CARGO_TARGET_DIR=... cargo build -p gait-diffuse --example bench_step
+Run:
+  ORT_DYLIB_PATH=.../libonnxruntime.so.1.31.1 python tools/diffuse/bench_step.py \
+      --bin $CARGO_TARGET_DIR/debug/examples/bench_step [--impls diffusers,ort,candle] [--rounds 2]
+
+The weights are written once (safetensors for candle and diffusers, ONNX with external data for
+ort: the UNet is 3.4 GB in f32; about 10 GB of temporary disk in all, removed at the end).
+Each implementation then runs in its own process (load, then --repeats steps), the processes
+interleaved over --rounds rounds so a changing machine load hits all of them alike. Prints
+seconds per step (best over all steps) for each, the ratios to diffusers, and each
+implementation's peak RSS (the largest over its processes, from wait4).
 """
 
 import argparse
+import gc
 import os
-import resource
+import shutil
 import subprocess
+import sys
 import tempfile
 import time
 
 import torch
-from diffusers import ControlNetModel, UNet2DConditionModel
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--bin", required=True)
-    ap.add_argument("--size", type=int, default=512)
-    ap.add_argument("--repeats", type=int, default=2)
-    ap.add_argument("--threads", type=int, default=os.cpu_count())
-    args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+def diffusers_worker(work, size, repeats, threads):
+    from diffusers import ControlNetModel, UNet2DConditionModel
+
+    torch.set_num_threads(threads)
+    unet = UNet2DConditionModel.from_pretrained(os.path.join(work, "sd", "unet")).eval()
+    cn = ControlNetModel.from_pretrained(os.path.join(work, "cn")).eval()
+    lat = size // 8
+    x = torch.randn(2, 4, lat, lat)
+    ctx = torch.randn(2, 77, 768)
+    cond = torch.rand(2, 3, size, size)
+    with torch.no_grad():
+        for i in range(repeats):
+            t0 = time.perf_counter()
+            down, mid = cn(x, 501, encoder_hidden_states=ctx, controlnet_cond=cond, return_dict=False)
+            unet(x, 501, encoder_hidden_states=ctx, down_block_additional_residuals=down,
+                 mid_block_additional_residual=mid)
+            print(f"diffusers step {i}: {time.perf_counter() - t0:.3f} s", flush=True)
+
+
+def prepare(work):
+    """SD 1.5's UNet (cross_attention_dim 768, the rest diffusers' defaults = SD 1.5) and
+    sd-controlnet-canny's ControlNet with random weights, as safetensors and as ONNX."""
+    from diffusers import ControlNetModel, UNet2DConditionModel
+
+    import export_onnx
+
     torch.manual_seed(0)
-    work = tempfile.mkdtemp(prefix="gait-bench-")
-    # SD 1.5 UNet (cross_attention_dim 768, the rest diffusers' defaults = SD 1.5)
-    # and sd-controlnet-canny's ControlNet, random weights.
     unet = UNet2DConditionModel(cross_attention_dim=768).eval()
     cn = ControlNetModel(cross_attention_dim=768).eval()
     with torch.no_grad():
@@ -38,30 +67,70 @@ def main():
             p.normal_(0, 0.02)
     unet.save_pretrained(os.path.join(work, "sd", "unet"))
     cn.save_pretrained(os.path.join(work, "cn"))
-    lat = args.size // 8
-    x = torch.randn(2, 4, lat, lat)
-    ctx = torch.randn(2, 77, 768)
-    cond = torch.rand(2, 3, args.size, args.size)
-    times = []
-    with torch.no_grad():
-        for i in range(args.repeats):
-            t0 = time.perf_counter()
-            down, mid = cn(x, 501, encoder_hidden_states=ctx, controlnet_cond=cond, return_dict=False)
-            unet(x, 501, encoder_hidden_states=ctx, down_block_additional_residuals=down, mid_block_additional_residual=mid)
-            times.append(time.perf_counter() - t0)
-            print(f"diffusers step {i}: {times[-1]:.3f} s", flush=True)
-    torch_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    onnx_dir = os.path.join(work, "onnx")
+    n = export_onnx.export_controlnet(os.path.join(work, "cn"), onnx_dir, "f32", cn)
+    export_onnx.export_unet(os.path.join(work, "sd", "unet"), onnx_dir, "f32", n, unet=unet, controlnet=cn)
     del unet, cn
-    out = subprocess.run(
-        [args.bin, os.path.join(work, "sd"), os.path.join(work, "cn"), str(args.size), str(args.repeats)],
-        capture_output=True, text=True, check=True,
-    ).stdout
-    print(out, end="")
-    candle = [float(l.split(":")[1].split()[0]) for l in out.splitlines() if l.startswith("candle step")]
-    candle_peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    best_t, best_c = min(times), min(candle)
-    print(f"size {args.size}, threads {args.threads}: diffusers {best_t:.2f} s, candle {best_c:.2f} s, "
-          f"candle/diffusers time ratio {best_c / best_t:.2f}; peak RSS diffusers {torch_peak:.0f} MiB, candle {candle_peak:.0f} MiB")
+    gc.collect()
+    return onnx_dir
+
+
+def run_child(cmd):
+    """Runs `cmd`; returns its step times (s) and its peak RSS (MiB)."""
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
+    out = proc.stdout.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    print(out, end="", flush=True)
+    if proc.returncode != 0:
+        raise SystemExit(f"{cmd[0]} failed with {proc.returncode}")
+    times = [float(l.split(":")[1].split()[0]) for l in out.splitlines() if " step " in l]
+    return times, usage.ru_maxrss / 1024
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--bin", help="the bench_step example (needed for candle and ort)")
+    ap.add_argument("--impls", default="diffusers,ort,candle")
+    ap.add_argument("--size", type=int, default=512)
+    ap.add_argument("--repeats", type=int, default=2, help="steps per process")
+    ap.add_argument("--rounds", type=int, default=1, help="interleaved processes per implementation")
+    ap.add_argument("--threads", type=int, default=os.cpu_count())
+    ap.add_argument("--worker", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.worker:
+        diffusers_worker(args.worker, args.size, args.repeats, args.threads)
+        return
+    impls = args.impls.split(",")
+    work = tempfile.mkdtemp(prefix="gait-bench-")
+    try:
+        t0 = time.perf_counter()
+        onnx_dir = prepare(work)
+        print(f"weights written and exported in {time.perf_counter() - t0:.0f} s", flush=True)
+        cmds = {
+            "diffusers": [sys.executable, os.path.abspath(__file__), "--worker", work, "--size", str(args.size),
+                          "--repeats", str(args.repeats), "--threads", str(args.threads)],
+            "candle": [args.bin, "candle", os.path.join(work, "sd"), os.path.join(work, "cn"), str(args.size),
+                       str(args.repeats)],
+            "ort": [args.bin, "ort", onnx_dir, str(args.size), str(args.repeats)],
+        }
+        times = {i: [] for i in impls}
+        peaks = {i: 0.0 for i in impls}
+        for r in range(args.rounds):
+            order = impls if r % 2 == 0 else impls[::-1]
+            for impl in order:
+                t, peak = run_child(cmds[impl])
+                times[impl] += t
+                peaks[impl] = max(peaks[impl], peak)
+        best = {i: min(times[i]) for i in impls}
+        ref = best.get("diffusers")
+        print(f"size {args.size}, threads {args.threads}, {args.rounds} round(s) x {args.repeats} steps")
+        for i in impls:
+            ratio = f", {i}/diffusers time ratio {best[i] / ref:.2f}" if ref and i != "diffusers" else ""
+            print(f"{i}: best {best[i]:.2f} s/step (all: {', '.join(f'{x:.1f}' for x in times[i])})"
+                  f"{ratio}; peak RSS {peaks[i]:.0f} MiB")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -24,6 +24,15 @@ pub enum Dtype {
 }
 
 impl Dtype {
+    /// The name used in the TOML.
+    pub fn name(self) -> &'static str {
+        match self {
+            Dtype::F32 => "f32",
+            Dtype::F16 => "f16",
+            Dtype::Bf16 => "bf16",
+        }
+    }
+
     pub fn candle(self) -> candle_core::DType {
         match self {
             Dtype::F32 => candle_core::DType::F32,
@@ -43,6 +52,9 @@ pub struct ControlnetConfig {
     pub sd_path: PathBuf,
     /// ControlNet folder in diffusers layout, relative to the models folder.
     pub controlnet_path: PathBuf,
+    /// `backend = "ort"`: folder of the ONNX exports written by
+    /// tools/diffuse/export_onnx.py, relative to the models folder.
+    pub onnx_path: PathBuf,
     pub prompt: String,
     pub negative_prompt: String,
     pub steps: usize,
@@ -68,6 +80,7 @@ impl Default for ControlnetConfig {
             backend: Backend::Candle,
             sd_path: "stable-diffusion-v1-5".into(),
             controlnet_path: "sd-controlnet-canny".into(),
+            onnx_path: "onnx/sd15-controlnet-canny".into(),
             prompt: PAPER_PROMPT.into(),
             negative_prompt: PAPER_NEGATIVE_PROMPT.into(),
             steps: 20,

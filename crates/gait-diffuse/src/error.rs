@@ -16,6 +16,9 @@ pub enum DiffuseError {
     Config(String),
     #[error("candle: {0}")]
     Candle(#[from] candle_core::Error),
+    /// ONNX Runtime failed (or is not available: `ORT_DYLIB_PATH` unset).
+    #[error("onnx runtime: {0}")]
+    Ort(String),
 }
 
 impl DiffuseError {
@@ -44,6 +47,7 @@ impl From<DiffuseError> for StageError {
             DiffuseError::BadModel { path, reason } => StageError::BadModel { path, reason },
             DiffuseError::Config(m) => StageError::BadInput(m),
             DiffuseError::Candle(e) => StageError::backend("candle", e),
+            DiffuseError::Ort(m) => StageError::backend("ort", m),
         }
     }
 }

@@ -1,13 +1,16 @@
 //! Image regenerators implementing [`gait_core::ImageRegenerator`], chosen in
 //! the `[regenerator]` table of a pipeline config by `kind`: `passthrough`
-//! (the paper's baseline) and `controlnet` (SD 1.5 + canny ControlNet on candle).
+//! (the paper's baseline) and `controlnet` (SD 1.5 + canny ControlNet on candle,
+//! or on ONNX Runtime from the exports of tools/diffuse/export_onnx.py).
 
 mod clip_text;
 mod config;
 mod controlnet;
 mod error;
 pub mod model_config;
+mod models;
 mod noise;
+pub mod ort_models;
 mod passthrough;
 mod pipeline;
 mod regenerator;
@@ -23,7 +26,9 @@ pub use config::{ControlnetConfig, Dtype, PAPER_NEGATIVE_PROMPT, PAPER_PROMPT};
 pub use controlnet::{ControlNet, ControlResiduals};
 pub use error::DiffuseError;
 use gait_core::{ImageRegenerator, StageContext, StageError};
+pub use models::DiffusionModels;
 pub use noise::NoiseRng;
+pub use ort_models::{OrtDenoiser, OrtModels};
 pub use passthrough::Passthrough;
 pub use pipeline::{ControlnetPipeline, DenoiseParams};
 pub use regenerator::{ControlnetRegenerator, canvas_for};
@@ -72,10 +77,13 @@ impl RegeneratorConfig {
     pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
         match self {
             RegeneratorConfig::Passthrough => Vec::new(),
-            RegeneratorConfig::Controlnet(c) => weights::required_files(
-                &ctx.model_path(&c.sd_path),
-                &ctx.model_path(&c.controlnet_path),
-            ),
+            RegeneratorConfig::Controlnet(c) => match c.backend {
+                gait_core::Backend::Candle => weights::required_files(
+                    &ctx.model_path(&c.sd_path),
+                    &ctx.model_path(&c.controlnet_path),
+                ),
+                gait_core::Backend::Ort => ort_models::onnx_files(&ctx.model_path(&c.onnx_path)),
+            },
             RegeneratorConfig::Plugin(p) => vec![p.resolved_path()],
         }
     }
@@ -102,7 +110,7 @@ mod tests {
             "kind = \"controlnet\"\nbackend = \"candle\"\nsteps = 2\nguidance_scale = 5.0\n\
              conditioning_scale = 0.5\nscheduler = \"ddim\"\nseed = 9\nshared_noise = true\n\
              dtype = \"bf16\"\nbatch = 4\nresolution = 256\nprompt = \"a\"\nnegative_prompt = \"b\"\n\
-             sd_path = \"x\"\ncontrolnet_path = \"y\"",
+             sd_path = \"x\"\ncontrolnet_path = \"y\"\nonnx_path = \"z\"",
         )
         .unwrap();
         let RegeneratorConfig::Controlnet(c) = c else {

@@ -1,12 +1,15 @@
 //! The StableDiffusionControlNetPipeline loop: prompt embeddings with
 //! classifier-free guidance, ControlNet residuals into the UNet at each
-//! scheduler step, VAE decode to an image in [0, 1].
+//! scheduler step, VAE decode to an image in [0, 1]. The networks come from a
+//! [`DiffusionModels`] backend (candle or ONNX Runtime); the loop is the same.
 
 use std::path::Path;
 
 use candle_core::{DType, Device, Tensor};
 
 use crate::DiffuseError;
+use crate::models::DiffusionModels;
+use crate::ort_models::OrtModels;
 use crate::schedule::{Scheduler, SchedulerKind};
 use crate::tokenizer::ClipTokenizer;
 use crate::weights::{MERGES_FILE, Models};
@@ -24,14 +27,14 @@ pub struct DenoiseParams {
 
 /// SD 1.5 + ControlNet, loaded and ready to generate.
 pub struct ControlnetPipeline {
-    pub models: Models,
+    pub models: Box<dyn DiffusionModels>,
     pub tokenizer: ClipTokenizer,
     pub dtype: DType,
     pub device: Device,
 }
 
 impl ControlnetPipeline {
-    /// Loads the models and tokenizer from diffusers-layout folders.
+    /// Loads the candle models and tokenizer from diffusers-layout folders.
     pub fn load(
         sd_dir: &Path,
         controlnet_dir: &Path,
@@ -40,24 +43,47 @@ impl ControlnetPipeline {
     ) -> Result<Self, DiffuseError> {
         let models = Models::load(sd_dir, controlnet_dir, dtype, device)?;
         let tokenizer = ClipTokenizer::from_merges_file(&sd_dir.join(MERGES_FILE))?;
-        Ok(Self {
+        Ok(Self::from_parts(Box::new(models), tokenizer, dtype, device))
+    }
+
+    /// Loads the ONNX exports of `tools/diffuse/export_onnx.py` from `onnx_dir`
+    /// (f32 on ONNX Runtime) with the tokenizer merges at `merges`.
+    pub fn load_ort(onnx_dir: &Path, merges: &Path) -> Result<Self, DiffuseError> {
+        let models = OrtModels::load(onnx_dir)?;
+        let tokenizer = ClipTokenizer::from_merges_file(merges)?;
+        Ok(Self::from_parts(
+            Box::new(models),
+            tokenizer,
+            DType::F32,
+            &Device::Cpu,
+        ))
+    }
+
+    /// A pipeline on any backend; `dtype` is the type the backend computes in.
+    pub fn from_parts(
+        models: Box<dyn DiffusionModels>,
+        tokenizer: ClipTokenizer,
+        dtype: DType,
+        device: &Device,
+    ) -> Self {
+        Self {
             models,
             tokenizer,
             dtype,
             device: device.clone(),
-        })
+        }
     }
 
     /// Pixels per latent cell (8 for SD 1.5).
     pub fn vae_scale(&self) -> usize {
-        self.models.vae_config.scale_factor()
+        self.models.vae_config().scale_factor()
     }
 
     /// Text-encoder hidden states `(1, 77, dim)` of a prompt.
     pub fn encode_prompt(&self, prompt: &str) -> Result<Tensor, DiffuseError> {
         let ids = self.tokenizer.encode(prompt);
         let ids = Tensor::new(ids.as_slice(), &self.device)?.unsqueeze(0)?;
-        Ok(self.models.text.forward(&ids)?)
+        self.models.encode_text(&ids)
     }
 
     /// The cross-attention context for one image: `[negative; prompt]` when
@@ -117,17 +143,10 @@ impl ControlnetPipeline {
                 x.clone()
             };
             let t = t as f64;
-            let res =
-                self.models
-                    .controlnet
-                    .forward(&input, t, &ctx, &control, p.conditioning_scale)?;
-            let eps = self.models.unet.forward_with_additional_residuals(
-                &input,
-                t,
-                &ctx,
-                Some(&res.down),
-                Some(&res.mid),
-            )?;
+            let res = self
+                .models
+                .controlnet(&input, t, &ctx, &control, p.conditioning_scale)?;
+            let eps = self.models.unet(&input, t, &ctx, &res)?;
             let eps = if guided {
                 let u = eps.narrow(0, 0, b)?;
                 let c = eps.narrow(0, b, b)?;
@@ -137,13 +156,8 @@ impl ControlnetPipeline {
             };
             x = sched.step(&eps, &x)?;
         }
-        let x = (x / self.models.vae_config.scaling_factor)?;
-        // candle-transformers 0.11.1's VAE decoder mixes the images of a batch
-        // (its mid-block attention), so decode one image at a time.
-        let imgs = (0..b)
-            .map(|i| self.models.vae.decode(&x.narrow(0, i, 1)?))
-            .collect::<candle_core::Result<Vec<_>>>()?;
-        let img = Tensor::cat(&imgs, 0)?;
+        let x = (x / self.models.vae_config().scaling_factor)?;
+        let img = self.models.decode(&x)?;
         Ok(((img.to_dtype(DType::F32)? / 2.0)? + 0.5)?.clamp(0f32, 1f32)?)
     }
 }

@@ -2,13 +2,13 @@
 //! in, regenerated frames of the same size and index out.
 
 use candle_core::{Device, Tensor};
-use gait_core::{EdgeMap, Frame, ImageRegenerator, Resize, StageContext, StageError};
+use gait_core::{Backend, EdgeMap, Frame, ImageRegenerator, Resize, StageContext, StageError};
 
 use crate::config::ControlnetConfig;
 use crate::noise::NoiseRng;
 use crate::pipeline::{ControlnetPipeline, DenoiseParams};
 use crate::warp::{canvas_to_frame, edge_to_canvas};
-use crate::{DiffuseError, weights};
+use crate::{DiffuseError, ort_models, weights};
 
 /// Regenerates each frame from its edge map with SD 1.5 + ControlNet.
 pub struct ControlnetRegenerator {
@@ -18,26 +18,36 @@ pub struct ControlnetRegenerator {
 }
 
 impl ControlnetRegenerator {
-    /// Loads the models named in `config` (paths relative to the models folder).
+    /// Loads the models named in `config` (paths relative to the models folder):
+    /// the diffusers folders on candle, the ONNX exports on ort.
     pub fn new(config: &ControlnetConfig, ctx: &StageContext) -> Result<Self, DiffuseError> {
         config.validate().map_err(DiffuseError::Config)?;
-        if config.backend != gait_core::Backend::Candle {
-            return Err(DiffuseError::Config(format!(
-                "regenerator.backend = \"{}\" is not available for kind = \"controlnet\" yet; valid: \"candle\"",
-                config.backend
-            )));
-        }
-        if config.dtype == crate::Dtype::Bf16 {
-            // candle 0.11.1 has no bf16 matmul on CPU; GPU builds come with issue 10.
-            return Err(DiffuseError::Config(
-                "regenerator.dtype = \"bf16\" needs a GPU build; on CPU use \"f32\" or \"f16\""
-                    .into(),
-            ));
-        }
-        let sd = ctx.model_path(&config.sd_path);
-        let cn = ctx.model_path(&config.controlnet_path);
-        weights::check_files(&sd, &cn)?;
-        let pipeline = ControlnetPipeline::load(&sd, &cn, config.dtype.candle(), &Device::Cpu)?;
+        let pipeline = match config.backend {
+            Backend::Candle => {
+                if config.dtype == crate::Dtype::Bf16 {
+                    // candle 0.11.1 has no bf16 matmul on CPU; GPU builds come with issue 10.
+                    return Err(DiffuseError::Config(
+                        "regenerator.dtype = \"bf16\" needs a GPU build; on CPU use \"f32\" or \"f16\""
+                            .into(),
+                    ));
+                }
+                let sd = ctx.model_path(&config.sd_path);
+                let cn = ctx.model_path(&config.controlnet_path);
+                weights::check_files(&sd, &cn)?;
+                ControlnetPipeline::load(&sd, &cn, config.dtype.candle(), &Device::Cpu)?
+            }
+            Backend::Ort => {
+                if config.dtype != crate::Dtype::F32 {
+                    return Err(DiffuseError::Config(format!(
+                        "regenerator.dtype = \"{}\" is not available with backend = \"ort\" (the ONNX exports run in f32); use \"f32\"",
+                        config.dtype.name()
+                    )));
+                }
+                let dir = ctx.model_path(&config.onnx_path);
+                ort_models::check_onnx_files(&dir)?;
+                ControlnetPipeline::load_ort(&dir, &dir.join(ort_models::ONNX_MERGES))?
+            }
+        };
         Self::from_pipeline(pipeline, config)
     }
 

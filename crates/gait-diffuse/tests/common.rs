@@ -51,3 +51,17 @@ pub fn assert_close(name: &str, ours: &Tensor, reference: &Tensor, tol: f64) {
     println!("{name}: max relative error {e:.3e}");
     assert!(e <= tol, "{name}: relative error {e:.3e} > {tol:.0e}");
 }
+
+/// The ONNX exports of the tiny models (tools/diffuse/export_onnx.py).
+pub fn tiny_onnx() -> PathBuf {
+    fixtures().join("tiny_onnx")
+}
+
+/// Fails the calling test, saying why, when ONNX Runtime cannot be found.
+pub fn require_ort() {
+    assert!(
+        std::env::var_os("ORT_DYLIB_PATH").is_some_and(|p| !p.is_empty()),
+        "ORT_DYLIB_PATH is not set: the ort tests need libonnxruntime.so \
+         (from the PyPI onnxruntime==1.31.1 wheel; tools/setup.sh fetches it, tools/test.sh sets it)"
+    );
+}

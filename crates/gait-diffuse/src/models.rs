@@ -1,0 +1,92 @@
+//! The four network calls of the ControlNet pipeline, behind one trait so the
+//! same denoising loop (tokenizer, guidance, schedulers, noise, batches) runs
+//! on candle ([`Models`]) and on ONNX Runtime ([`crate::OrtModels`]).
+//! Tensors cross the trait as candle CPU tensors in the pipeline's dtype.
+
+use candle_core::{DType, Tensor};
+
+use crate::DiffuseError;
+use crate::controlnet::ControlResiduals;
+use crate::model_config::VaeConfig;
+use crate::weights::Models;
+
+/// Text encoder, ControlNet, UNet and VAE decoder of one SD + ControlNet pair.
+pub trait DiffusionModels: Send {
+    /// Last hidden state `(B, n, dim)` for token ids `(B, n)` (u32).
+    fn encode_text(&self, ids: &Tensor) -> Result<Tensor, DiffuseError>;
+
+    /// ControlNet residuals for `sample` `(B, 4, h, w)` at `timestep`, under
+    /// `cond` `(B, 3, 8h, 8w)` in [0, 1], each multiplied by `scale`.
+    fn controlnet(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        cond: &Tensor,
+        scale: f64,
+    ) -> Result<ControlResiduals, DiffuseError>;
+
+    /// The UNet's noise prediction with the ControlNet residuals added.
+    fn unet(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        residuals: &ControlResiduals,
+    ) -> Result<Tensor, DiffuseError>;
+
+    /// Images `(B, 3, 8h, 8w)` in [-1, 1] from latents already divided by the
+    /// VAE's scaling factor.
+    fn decode(&self, latents: &Tensor) -> Result<Tensor, DiffuseError>;
+
+    /// The VAE's configuration (scaling factor, pixels per latent cell).
+    fn vae_config(&self) -> &VaeConfig;
+}
+
+impl DiffusionModels for Models {
+    fn encode_text(&self, ids: &Tensor) -> Result<Tensor, DiffuseError> {
+        Ok(self.text.forward(&ids.to_dtype(DType::U32)?)?)
+    }
+
+    fn controlnet(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        cond: &Tensor,
+        scale: f64,
+    ) -> Result<ControlResiduals, DiffuseError> {
+        Ok(self
+            .controlnet
+            .forward(sample, timestep, context, cond, scale)?)
+    }
+
+    fn unet(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        residuals: &ControlResiduals,
+    ) -> Result<Tensor, DiffuseError> {
+        Ok(self.unet.forward_with_additional_residuals(
+            sample,
+            timestep,
+            context,
+            Some(&residuals.down),
+            Some(&residuals.mid),
+        )?)
+    }
+
+    fn decode(&self, latents: &Tensor) -> Result<Tensor, DiffuseError> {
+        // candle-transformers 0.11.1's VAE decoder mixes the images of a batch
+        // (its mid-block attention), so decode one image at a time.
+        let imgs = (0..latents.dim(0)?)
+            .map(|i| self.vae.decode(&latents.narrow(0, i, 1)?))
+            .collect::<candle_core::Result<Vec<_>>>()?;
+        Ok(Tensor::cat(&imgs, 0)?)
+    }
+
+    fn vae_config(&self) -> &VaeConfig {
+        &self.vae_config
+    }
+}
