@@ -4,17 +4,11 @@
 
 use std::path::Path;
 
-use gait_ort::Environment;
-use ort::session::Session;
+use gait_ort::Session;
 use ort::value::TensorRef;
 
 use crate::HedError;
 use crate::hed_fuse::SideOutput;
-
-/// The process's shared ONNX Runtime environment (see `gait-ort`).
-fn environment() -> Result<Environment, HedError> {
-    gait_ort::environment().map_err(HedError::Inference)
-}
 
 pub(crate) struct OrtHed {
     session: Session,
@@ -22,10 +16,7 @@ pub(crate) struct OrtHed {
 
 impl OrtHed {
     pub(crate) fn load(path: &Path) -> Result<Self, HedError> {
-        let env = environment()?;
-        let session = Session::builder(&env)
-            .and_then(|mut b| b.commit_from_file(path))
-            .map_err(|e| HedError::Format(e.to_string()))?;
+        let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(HedError::Format)?;
         let names: Vec<&str> = session.outputs().iter().map(|o| o.name()).collect();
         for i in 1..=5 {
             let want = format!("side{i}");

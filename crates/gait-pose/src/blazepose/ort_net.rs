@@ -4,8 +4,7 @@
 use std::path::Path;
 
 use gait_core::StageError;
-use gait_ort::Environment;
-use ort::session::Session;
+use gait_ort::Session;
 use ort::value::Tensor;
 
 use super::net::{Net, onnx_path};
@@ -33,11 +32,6 @@ impl Net for OrtNet {
     }
 }
 
-/// The process's shared ONNX Runtime environment (see `gait-ort`).
-fn environment() -> Result<Environment, StageError> {
-    gait_ort::environment().map_err(err)
-}
-
 /// Opens the ONNX file next to the `.tflite` file `tflite` (parsed as `graph`).
 pub(crate) fn load(tflite: &Path, graph: &Graph) -> Result<Box<dyn Net>, StageError> {
     let onnx = onnx_path(tflite);
@@ -47,23 +41,7 @@ pub(crate) fn load(tflite: &Path, graph: &Graph) -> Result<Box<dyn Net>, StageEr
             hint: "run `gait models fetch blazepose` (it also writes the ONNX exports)".into(),
         });
     }
-    if std::env::var_os("ORT_DYLIB_PATH").is_none() {
-        return Err(err(
-            "ORT_DYLIB_PATH is not set; point it at libonnxruntime.so (from the PyPI onnxruntime wheel)",
-        ));
-    }
-    let env = environment()?;
-    let session = Session::builder(&env)
-        .map_err(err)?
-        .with_intra_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .map_err(err)?
-        // Spinning workers wait for the next op busily; these networks are
-        // small, so on a loaded machine the spinning costs more than it saves
-        // (measured: 2 threads 23 ms with spinning, 12 ms without, detector).
-        .with_intra_op_spinning(false)
-        .map_err(err)?
-        .commit_from_file(&onnx)
-        .map_err(err)?;
+    let session = gait_ort::session(&onnx, gait_ort::Device::Cpu).map_err(err)?;
     let input = graph
         .inputs
         .first()

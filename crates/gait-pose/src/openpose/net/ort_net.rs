@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use gait_core::StageError;
-use ort::session::Session;
+use gait_ort::Session;
 use ort::value::Tensor;
 
 use crate::openpose::{NetInput, NetOutput, OpenposeModel, OpenposeNet};
@@ -40,12 +40,7 @@ impl OrtNet {
                 hint: "export one with tools/openpose/export_onnx.py".into(),
             });
         }
-        let env = gait_ort::environment().map_err(err)?;
-        let session = Session::builder(&env)
-            .map_err(err)?
-            .with_intra_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
-            .map_err(err)?
-            .commit_from_file(path)
+        let session = gait_ort::session(path, gait_ort::Device::Cpu)
             .map_err(|e| StageError::bad_model(path, e))?;
         let names: Vec<&str> = session.outputs().iter().map(|o| o.name()).collect();
         let outputs = if names.contains(&"paf") && names.contains(&"heatmap") {
