@@ -217,3 +217,24 @@ fn half_precision_is_refused_on_ort() {
     let msg = err.to_string();
     assert!(msg.contains("f16") && msg.contains("ort"), "{msg}");
 }
+
+#[test]
+fn a_unet_graph_without_residual_inputs_is_named() {
+    require_ort();
+    let dir = models_dir();
+    let onnx = dir.path().join("onnx/sd15-controlnet-canny");
+    // The ControlNet graph where the UNet belongs: it takes no residuals.
+    std::fs::copy(
+        onnx.join("controlnet/model.onnx"),
+        onnx.join("unet/model.onnx"),
+    )
+    .unwrap();
+    let Err(err) = OrtModels::load(&onnx) else {
+        panic!("loaded a UNet without residual inputs")
+    };
+    let msg = err.to_string();
+    assert!(
+        msg.contains("unet/model.onnx") && msg.contains("down_block_res_0"),
+        "{msg}"
+    );
+}
