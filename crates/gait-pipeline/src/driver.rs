@@ -342,7 +342,6 @@ fn bad_output(stage: &str, expected: &str) -> PipelineError {
     ))
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

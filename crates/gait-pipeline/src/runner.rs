@@ -166,7 +166,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let first = config.input.first_frame;
     let stride = sel.stride;
     let grid = Order::Grid { first, stride };
-    let on_grid = |index: usize, last: bool| last || (index - first) % stride == 0;
+    let on_grid = |index: usize, last: bool| last || (index - first).is_multiple_of(stride);
     let mut tools = Tools {
         config,
         stages: &mut stages,
@@ -394,4 +394,3 @@ fn progress_bar(enabled: bool, total: Option<usize>, pass: &str) -> ProgressBar 
     bar.set_message(pass.to_string());
     bar
 }
-

@@ -220,7 +220,8 @@ pub fn judge(
         for &(kind, l, r) in &segments {
             let (left, right) = (length(pose, l), length(pose, r));
             if let Some(m) = medians[kind].filter(|m| *m > 0.0)
-                && !(inside(left / m, config.segment_ratio) && inside(right / m, config.segment_ratio))
+                && !(inside(left / m, config.segment_ratio)
+                    && inside(right / m, config.segment_ratio))
             {
                 *reason = Some(PoorReason::SegmentLength);
                 break;
@@ -246,7 +247,10 @@ fn likelihood_reason(
     watched: &[usize],
     config: &SelectionConfig,
 ) -> Option<PoorReason> {
-    let points: Vec<_> = watched.iter().filter_map(|&i| pose.keypoints.get(i)).collect();
+    let points: Vec<_> = watched
+        .iter()
+        .filter_map(|&i| pose.keypoints.get(i))
+        .collect();
     if points.len() != watched.len() || points.iter().any(|k| !k.is_found()) {
         return Some(PoorReason::Missing);
     }
@@ -256,7 +260,11 @@ fn likelihood_reason(
         LikelihoodStat::Mean => values.sum::<f64>() / points.len() as f64,
     };
     // NaN likelihoods fail the test too.
-    (!(stat >= config.min_likelihood)).then_some(PoorReason::LowLikelihood)
+    if stat >= config.min_likelihood {
+        None
+    } else {
+        Some(PoorReason::LowLikelihood)
+    }
 }
 
 fn median(values: &mut Vec<f64>) -> Option<f64> {
@@ -374,7 +382,11 @@ mod tests {
         set(&mut poses[2], "right_heel", Keypoint::missing());
         // 3: both shanks twice as long (ankles lower) -> segment length.
         set(&mut poses[3], "left_ankle", Keypoint::new(50.0, 220.0, 0.9));
-        set(&mut poses[3], "right_ankle", Keypoint::new(60.0, 220.0, 0.9));
+        set(
+            &mut poses[3],
+            "right_ankle",
+            Keypoint::new(60.0, 220.0, 0.9),
+        );
         // 4: left thigh 1.5x the median, right thigh 0.75x: each inside
         // [0.6, 1.6], but their ratio 2.0 is outside side_ratio.
         set(&mut poses[4], "left_hip", Keypoint::new(50.0, 80.0, 0.9));
@@ -442,7 +454,12 @@ mod tests {
         for name in ["left_hip", "left_knee", "right_hip", "right_knee"] {
             set(&mut p, name, Keypoint::new(50.0, 100.0, 0.9));
         }
-        let j = judge(&[pose(0.9), pose(0.9), p], &names(), &SelectionConfig::default()).unwrap();
+        let j = judge(
+            &[pose(0.9), pose(0.9), p],
+            &names(),
+            &SelectionConfig::default(),
+        )
+        .unwrap();
         assert_eq!(j.reasons[2], Some(PoorReason::SegmentLength));
     }
 
@@ -482,10 +499,7 @@ mod tests {
 
     #[test]
     fn ranges_compact_runs() {
-        assert_eq!(
-            ranges([1, 2, 3, 5, 7, 8]),
-            vec![[1, 3], [5, 5], [7, 8]]
-        );
+        assert_eq!(ranges([1, 2, 3, 5, 7, 8]), vec![[1, 3], [5, 5], [7, 8]]);
         assert!(ranges([]).is_empty());
     }
 
