@@ -197,3 +197,25 @@ fn interrupted_run_resumes_where_it_stopped() {
     // is identical to one that was never interrupted.
     assert_eq!(a, b);
 }
+
+#[test]
+fn a_later_first_frame_does_not_reuse_tracked_poses() {
+    // BlazePose tracks from frame to frame, so a run starting at 152 must not
+    // take the poses that a run starting at 150 tracked into 152 and 153.
+    let dir = tempfile::tempdir().unwrap();
+    let cache = format!("run.cache_dir={}", dir.path().join("shared").display());
+    let (long, short, alone) = (
+        dir.path().join("long"),
+        dir.path().join("short"),
+        dir.path().join("alone"),
+    );
+    run_ok(run_args(&long, 150, 153).args(["--set", &cache]));
+    run_ok(run_args(&short, 152, 153).args(["--set", &cache]));
+    run_ok(run_args(&alone, 152, 153).args(["--set", "run.cache=false"]));
+    let manifest = read_json(&short.join("run.json"));
+    assert_eq!(manifest["stages"]["pose"]["computed"].as_u64(), Some(2));
+    assert_eq!(
+        rows(&short.join("keypoints.csv")),
+        rows(&alone.join("keypoints.csv"))
+    );
+}

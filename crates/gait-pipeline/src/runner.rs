@@ -97,17 +97,18 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         &(&config.regenerator, &regen_models),
     );
     // A tracking estimator's result depends on the frames it saw before,
-    // so the pose key covers the stride and, with selective regeneration,
-    // the rule that picks the frames. Edge maps and regenerated images do
-    // not: changing the rule reuses every image already regenerated.
+    // so the pose key covers the first frame, the stride and, with selective
+    // regeneration, the rule that picks the frames. Edge maps and regenerated
+    // images do not: changing the rule reuses every image already regenerated.
+    let start = config.input.first_frame;
     let pose_key = match sel.tracking_key() {
-        None => chain_key(&regen_key, "pose", &(&config.pose, &pose_models)),
-        Some(t) => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, &t)),
+        None => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, start)),
+        Some(t) => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, &t, start)),
     };
     let original_key = chain_key(
         &input_key,
         ORIGINAL_POSE,
-        &(&config.pose, &pose_models, sel.stride),
+        &(&config.pose, &pose_models, sel.stride, start),
     );
     let caches = if config.run.cache {
         let root = config
