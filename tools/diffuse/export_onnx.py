@@ -26,6 +26,9 @@ models folder, default `onnx/sd15-controlnet-canny`):
                            mid_block_res -> noise_pred f32 [batch, 4, h, w]
   vae_decoder/model.onnx   latent_sample f32 [batch, 4, h, w] (already divided by the VAE's
                            scaling_factor) -> sample f32 [batch, 3, 8h, 8w] in [-1, 1]
+  vae_encoder/model.onnx   sample f32 [batch, 3, 8h, 8w] in [-1, 1] -> latent_mean, latent_std
+                           f32 [batch, 4, h, w] (the latent distribution, not scaled; only
+                           image-to-image and inpainting need it)
   */config.json            the source folder's config.json (the Rust side reads the VAE's
                            scaling factor and the ControlNet's residual count from them)
   tokenizer/merges.txt     (and the other tokenizer files) copied from the SD folder, unless
@@ -100,6 +103,16 @@ class VaeDecoder(torch.nn.Module):
 
     def forward(self, latent_sample):
         return self.vae.decode(latent_sample, return_dict=False)[0]
+
+
+class VaeEncoder(torch.nn.Module):
+    def __init__(self, vae):
+        super().__init__()
+        self.vae = vae
+
+    def forward(self, sample):
+        dist = self.vae.encode(sample, return_dict=False)[0]
+        return dist.mean, dist.std
 
 
 def num_down_residuals(controlnet):
@@ -245,6 +258,19 @@ def export_vae_decoder(sd, out, weights):
     copy_config(os.path.join(sd, "vae"), os.path.join(out, "vae_decoder"))
 
 
+def export_vae_encoder(sd, out, weights):
+    from diffusers import AutoencoderKL
+
+    vae = AutoencoderKL.from_pretrained(os.path.join(sd, "vae"), torch_dtype=torch.float32).eval()
+    img = torch.rand(1, 3, 64, 64) * 2 - 1
+    lat_axes = {0: "batch", 2: "height", 3: "width"}
+    save(VaeEncoder(vae), (img,), ["sample"], ["latent_mean", "latent_std"],
+         {"sample": {0: "batch", 2: "image_height", 3: "image_width"},
+          "latent_mean": lat_axes, "latent_std": lat_axes},
+         os.path.join(out, "vae_encoder", "model.onnx"), weights)
+    copy_config(os.path.join(sd, "vae"), os.path.join(out, "vae_encoder"))
+
+
 def copy_tokenizer(sd, out):
     src = os.path.join(sd, "tokenizer")
     dst = os.path.join(out, "tokenizer")
@@ -253,7 +279,7 @@ def copy_tokenizer(sd, out):
         shutil.copy(os.path.join(src, f), os.path.join(dst, f))
 
 
-COMPONENTS = ("text_encoder", "controlnet", "unet", "vae_decoder")
+COMPONENTS = ("text_encoder", "controlnet", "unet", "vae_decoder", "vae_encoder")
 
 
 def main():
@@ -283,6 +309,8 @@ def main():
             export_unet(os.path.join(args.sd, "unet"), args.out, args.weights, n, controlnet=cn)
     if "vae_decoder" in only:
         export_vae_decoder(args.sd, args.out, args.weights)
+    if "vae_encoder" in only:
+        export_vae_encoder(args.sd, args.out, args.weights)
     if not args.no_tokenizer:
         copy_tokenizer(args.sd, args.out)
 

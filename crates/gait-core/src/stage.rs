@@ -21,6 +21,24 @@ pub trait ImageRegenerator: Send {
         frames: &[Frame],
         edges: Option<&[EdgeMap]>,
     ) -> Result<Vec<Frame>, StageError>;
+
+    /// As [`Self::regenerate`], with the pose found on each ORIGINAL frame
+    /// (one per frame, in frame pixels), for regenerators that need it, e.g.
+    /// to inpaint a leg mask. The default ignores the poses.
+    fn regenerate_with_poses(
+        &mut self,
+        frames: &[Frame],
+        edges: Option<&[EdgeMap]>,
+        _poses: &[Pose],
+    ) -> Result<Vec<Frame>, StageError> {
+        self.regenerate(frames, edges)
+    }
+
+    /// Notes for the run's warnings gathered since the last call (e.g. frames
+    /// handed on unchanged because no leg was found to inpaint).
+    fn take_warnings(&mut self) -> Vec<String> {
+        Vec::new()
+    }
 }
 
 /// Finds one person's keypoints per frame.

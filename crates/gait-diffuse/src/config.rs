@@ -5,6 +5,8 @@ use std::path::PathBuf;
 use gait_core::Backend;
 use serde::{Deserialize, Serialize};
 
+use crate::leg_mask::LegMaskConfig;
+use crate::modes::{RegenMode, begin_step};
 use crate::schedule::SchedulerKind;
 
 /// The paper's prompt for regenerating the person with intact limbs.
@@ -72,6 +74,15 @@ pub struct ControlnetConfig {
     /// Short side of the generation canvas (a multiple of 64; long side
     /// follows the frame's aspect, rounded to 64, as ControlNet's annotators do).
     pub resolution: u32,
+    /// `text2img` (the paper), `img2img` (from the frame) or `inpaint` (the
+    /// leg mask only); the last two need the VAE encoder (on ort:
+    /// `vae_encoder/model.onnx` from tools/diffuse/export_onnx.py).
+    pub mode: RegenMode,
+    /// `img2img` / `inpaint`: noise added to the frame, in (0, 1]; when
+    /// unset, diffusers' defaults (0.8 for img2img, 1.0 for inpaint).
+    pub strength: Option<f64>,
+    /// `inpaint`: how the leg mask is drawn from the original frame's pose.
+    pub mask: LegMaskConfig,
 }
 
 impl Default for ControlnetConfig {
@@ -92,6 +103,9 @@ impl Default for ControlnetConfig {
             dtype: Dtype::F32,
             batch: 1,
             resolution: 512,
+            mode: RegenMode::Text2img,
+            strength: None,
+            mask: LegMaskConfig::default(),
         }
     }
 }
@@ -114,6 +128,26 @@ impl ControlnetConfig {
                 self.resolution
             ));
         }
+        if let Some(s) = self.strength
+            && !self.mode.uses_frame()
+        {
+            return Err(format!(
+                "regenerator.strength = {s} needs mode = \"img2img\" or \"inpaint\" (mode is \"{}\")",
+                self.mode.name()
+            ));
+        }
+        if self.mode.uses_frame() {
+            begin_step(self.steps, self.strength()).map_err(|e| e.to_string())?;
+        }
+        if self.mode == RegenMode::Inpaint {
+            self.mask.validate()?;
+        }
         Ok(())
+    }
+
+    /// The strength in use: the configured one or the mode's default.
+    pub fn strength(&self) -> f64 {
+        self.strength
+            .unwrap_or_else(|| self.mode.default_strength())
     }
 }

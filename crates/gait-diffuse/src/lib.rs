@@ -7,8 +7,10 @@ mod clip_text;
 mod config;
 mod controlnet;
 mod error;
+mod leg_mask;
 pub mod model_config;
 mod models;
+mod modes;
 mod noise;
 pub mod ort_models;
 mod passthrough;
@@ -16,6 +18,7 @@ mod pipeline;
 mod regenerator;
 mod schedule;
 mod tokenizer;
+mod vae_encoder;
 mod warp;
 pub mod weights;
 
@@ -26,7 +29,9 @@ pub use config::{ControlnetConfig, Dtype, PAPER_NEGATIVE_PROMPT, PAPER_PROMPT};
 pub use controlnet::{ControlNet, ControlResiduals};
 pub use error::DiffuseError;
 use gait_core::{ImageRegenerator, StageContext, StageError};
+pub use leg_mask::{LegMask, LegMaskConfig};
 pub use models::DiffusionModels;
+pub use modes::{KeepRegion, RegenMode, begin_step, latent_mask};
 pub use noise::NoiseRng;
 pub use ort_models::{OrtDenoiser, OrtModels};
 pub use passthrough::Passthrough;
@@ -35,6 +40,7 @@ pub use regenerator::{ControlnetRegenerator, canvas_for};
 pub use schedule::{Scheduler, SchedulerKind};
 use serde::{Deserialize, Serialize};
 pub use tokenizer::{ClipTokenizer, MAX_LEN};
+pub use vae_encoder::VaeEncoder;
 
 /// The `[regenerator]` table. `kind` picks the regenerator.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -67,6 +73,13 @@ impl RegeneratorConfig {
         }
     }
 
+    /// True when the regenerator needs the pose of each original frame
+    /// (`mode = "inpaint"`): the pipeline then estimates poses on the
+    /// original frames first and calls `ImageRegenerator::regenerate_with_poses`.
+    pub fn needs_poses(&self) -> bool {
+        matches!(self, RegeneratorConfig::Controlnet(c) if c.mode == RegenMode::Inpaint)
+    }
+
     /// True when the regenerator hands frames on unchanged, so the runner need
     /// not cache its output.
     pub fn is_identity(&self) -> bool {
@@ -82,7 +95,14 @@ impl RegeneratorConfig {
                     &ctx.model_path(&c.sd_path),
                     &ctx.model_path(&c.controlnet_path),
                 ),
-                gait_core::Backend::Ort => ort_models::onnx_files(&ctx.model_path(&c.onnx_path)),
+                gait_core::Backend::Ort => {
+                    let dir = ctx.model_path(&c.onnx_path);
+                    let mut files = ort_models::onnx_files(&dir);
+                    if c.mode.uses_frame() {
+                        files.push(dir.join(ort_models::ONNX_VAE_ENCODER));
+                    }
+                    files
+                }
             },
             RegeneratorConfig::Plugin(p) => vec![p.resolved_path()],
         }

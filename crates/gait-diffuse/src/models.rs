@@ -41,6 +41,16 @@ pub trait DiffusionModels: Send {
 
     /// The VAE's configuration (scaling factor, pixels per latent cell).
     fn vae_config(&self) -> &VaeConfig;
+
+    /// Mean and standard deviation of the VAE's latent distribution of
+    /// images `(B, 3, 8h, 8w)` in [-1, 1] (image-to-image and inpainting).
+    fn encode_image(&self, _images: &Tensor) -> Result<(Tensor, Tensor), DiffuseError> {
+        Err(DiffuseError::Config(
+            "this backend has no VAE encoder, which regenerator.mode = \"img2img\" and \
+             \"inpaint\" need"
+                .into(),
+        ))
+    }
 }
 
 impl DiffusionModels for Models {
@@ -88,5 +98,12 @@ impl DiffusionModels for Models {
 
     fn vae_config(&self) -> &VaeConfig {
         &self.vae_config
+    }
+
+    fn encode_image(&self, images: &Tensor) -> Result<(Tensor, Tensor), DiffuseError> {
+        let enc = self.vae_encoder.as_ref().ok_or_else(|| {
+            DiffuseError::Config("the VAE encoder was not loaded (Models::load_vae_encoder)".into())
+        })?;
+        Ok(enc.encode(images)?)
     }
 }

@@ -20,6 +20,8 @@ pub const ONNX_TEXT: &str = "text_encoder/model.onnx";
 pub const ONNX_CONTROLNET: &str = "controlnet/model.onnx";
 pub const ONNX_UNET: &str = "unet/model.onnx";
 pub const ONNX_VAE: &str = "vae_decoder/model.onnx";
+/// Optional: the VAE encoder image-to-image and inpainting need.
+pub const ONNX_VAE_ENCODER: &str = "vae_encoder/model.onnx";
 /// The tokenizer merges the export script copies next to the graphs.
 pub const ONNX_MERGES: &str = "tokenizer/merges.txt";
 const EXPORT_HINT: &str = "export them from the diffusers-layout SD 1.5 and ControlNet folders with \
@@ -307,6 +309,8 @@ pub struct OrtModels {
     denoiser: OrtDenoiser,
     vae: OnnxNet,
     vae_config: VaeConfig,
+    /// Loaded when `vae_encoder/model.onnx` exists.
+    vae_encoder: Option<OnnxNet>,
 }
 
 impl OrtModels {
@@ -321,11 +325,21 @@ impl OrtModels {
         let vae = OnnxNet::load(&onnx_dir.join(ONNX_VAE))?;
         vae.require(&["latent_sample".to_string()], false)?;
         let vae_config: VaeConfig = read_config(&onnx_dir.join("vae_decoder"))?;
+        let enc_path = onnx_dir.join(ONNX_VAE_ENCODER);
+        let vae_encoder = if enc_path.is_file() {
+            let enc = OnnxNet::load(&enc_path)?;
+            enc.require(&["sample".to_string()], false)?;
+            enc.require(&["latent_mean", "latent_std"].map(String::from), true)?;
+            Some(enc)
+        } else {
+            None
+        };
         Ok(Self {
             text,
             denoiser,
             vae,
             vae_config,
+            vae_encoder,
         })
     }
 
@@ -385,5 +399,24 @@ impl DiffusionModels for OrtModels {
 
     fn vae_config(&self) -> &VaeConfig {
         &self.vae_config
+    }
+
+    fn encode_image(&self, images: &Tensor) -> Result<(Tensor, Tensor), DiffuseError> {
+        let enc = self.vae_encoder.as_ref().ok_or_else(|| {
+            DiffuseError::Config(format!(
+                "no {ONNX_VAE_ENCODER} next to the other graphs: image-to-image and inpainting \
+                 need it; {EXPORT_HINT} DIR --only vae_encoder"
+            ))
+        })?;
+        let out = enc.run(vec![f32_input("sample", images)?])?;
+        let pick = |name: &str| -> Result<Tensor, DiffuseError> {
+            let i = enc
+                .outputs
+                .iter()
+                .position(|o| o == name)
+                .ok_or_else(|| ort_err(format!("VAE encoder has no output `{name}`")))?;
+            Ok(out[i].to_dtype(images.dtype())?)
+        };
+        Ok((pick("latent_mean")?, pick("latent_std")?))
     }
 }

@@ -9,6 +9,7 @@ use candle_core::{DType, Device, Tensor};
 
 use crate::DiffuseError;
 use crate::models::DiffusionModels;
+use crate::modes::KeepRegion;
 use crate::ort_models::OrtModels;
 use crate::schedule::{Scheduler, SchedulerKind};
 use crate::tokenizer::ClipTokenizer;
@@ -111,6 +112,21 @@ impl ControlnetPipeline {
         latents: &Tensor,
         p: &DenoiseParams,
     ) -> Result<Tensor, DiffuseError> {
+        self.denoise(context, control, latents, p, 0, None)
+    }
+
+    /// The loop from scheduler step `begin` (image-to-image and inpainting
+    /// skip the noisiest steps); with `keep`, inpainting's known region is
+    /// put back after every step.
+    pub(crate) fn denoise(
+        &self,
+        context: &Tensor,
+        control: &Tensor,
+        latents: &Tensor,
+        p: &DenoiseParams,
+        begin: usize,
+        keep: Option<&KeepRegion>,
+    ) -> Result<Tensor, DiffuseError> {
         let b = latents.dim(0)?;
         let guided = p.guidance_scale > 1.0;
         let copies = if guided { 2 } else { 1 };
@@ -135,8 +151,9 @@ impl ControlnetPipeline {
         };
         let mut x = latents.to_dtype(self.dtype)?;
         let mut sched = Scheduler::new(p.scheduler, p.steps);
-        let timesteps = sched.timesteps().to_vec();
-        for &t in &timesteps {
+        let timesteps = sched.timesteps().get(begin..).unwrap_or_default().to_vec();
+        sched.set_begin_index(begin);
+        for (i, &t) in timesteps.iter().enumerate() {
             let input = if guided {
                 Tensor::cat(&[&x, &x], 0)?
             } else {
@@ -155,6 +172,9 @@ impl ControlnetPipeline {
                 eps
             };
             x = sched.step(&eps, &x)?;
+            if let Some(k) = keep {
+                x = k.blend(&sched, &x, timesteps.get(i + 1).copied())?;
+            }
         }
         let x = (x / self.models.vae_config().scaling_factor)?;
         let img = self.models.decode(&x)?;

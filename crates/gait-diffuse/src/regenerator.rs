@@ -2,12 +2,16 @@
 //! in, regenerated frames of the same size and index out.
 
 use candle_core::{Device, Tensor};
-use gait_core::{Backend, EdgeMap, Frame, ImageRegenerator, Resize, StageContext, StageError};
+use gait_core::{
+    Backend, EdgeMap, Frame, ImageRegenerator, Pose, Resize, StageContext, StageError,
+};
 
 use crate::config::ControlnetConfig;
+use crate::leg_mask::LegMask;
+use crate::modes::RegenMode;
 use crate::noise::NoiseRng;
 use crate::pipeline::{ControlnetPipeline, DenoiseParams};
-use crate::warp::{canvas_to_frame, edge_to_canvas};
+use crate::warp::{canvas_to_frame, edge_to_canvas, frame_to_canvas};
 use crate::{DiffuseError, ort_models, weights};
 
 /// Regenerates each frame from its edge map with SD 1.5 + ControlNet.
@@ -15,6 +19,8 @@ pub struct ControlnetRegenerator {
     pipeline: ControlnetPipeline,
     context: Tensor,
     config: ControlnetConfig,
+    /// Notes for run.json, handed out by `take_warnings`.
+    warnings: Vec<String>,
 }
 
 impl ControlnetRegenerator {
@@ -34,9 +40,31 @@ impl ControlnetRegenerator {
                 let sd = ctx.model_path(&config.sd_path);
                 let cn = ctx.model_path(&config.controlnet_path);
                 weights::check_files(&sd, &cn)?;
-                ControlnetPipeline::load(&sd, &cn, config.dtype.candle(), &Device::Cpu)?
+                if config.mode.uses_frame() {
+                    ControlnetPipeline::load_with_encoder(
+                        &sd,
+                        &cn,
+                        config.dtype.candle(),
+                        &Device::Cpu,
+                    )?
+                } else {
+                    ControlnetPipeline::load(&sd, &cn, config.dtype.candle(), &Device::Cpu)?
+                }
             }
             Backend::Ort => {
+                let encoder = ctx
+                    .model_path(&config.onnx_path)
+                    .join(ort_models::ONNX_VAE_ENCODER);
+                if config.mode.uses_frame() && !encoder.is_file() {
+                    return Err(DiffuseError::Missing {
+                        files: vec![encoder],
+                        hint: format!(
+                            "regenerator.mode = \"{}\" needs the VAE encoder: export it with \
+                             `python tools/diffuse/export_onnx.py ... --only vae_encoder`, or use mode = \"text2img\"",
+                            config.mode.name()
+                        ),
+                    });
+                }
                 if config.dtype != crate::Dtype::F32 {
                     return Err(DiffuseError::Config(format!(
                         "regenerator.dtype = \"{}\" is not available with backend = \"ort\" (the ONNX exports run in f32); use \"f32\"",
@@ -65,6 +93,7 @@ impl ControlnetRegenerator {
             pipeline,
             context,
             config: config.clone(),
+            warnings: Vec::new(),
         })
     }
 
@@ -78,26 +107,52 @@ impl ControlnetRegenerator {
         NoiseRng::new(seed).normals(shape.0 * shape.1 * shape.2)
     }
 
+    /// Initial latent noise and the VAE sample's normals for a frame: one
+    /// stream of `2n` normals from the frame's seed; its first half is the
+    /// text-to-image noise, so the modes share a frame's noise.
+    fn frame_noise(&self, index: usize, n: usize) -> (Vec<f32>, Vec<f32>) {
+        let mut v = self.initial_noise(index, (2, n, 1));
+        let eps = v.split_off(n);
+        (v, eps)
+    }
+
     fn run_group(
         &self,
         frames: &[&Frame],
         edges: &[&EdgeMap],
+        masks: &[Option<&LegMask>],
         canvas: &Resize,
     ) -> Result<Vec<Frame>, DiffuseError> {
         let (w, h) = (canvas.dst_width as usize, canvas.dst_height as usize);
         let s = self.pipeline.vae_scale();
         let (lh, lw) = (h / s, w / s);
-        let mut control = Vec::with_capacity(frames.len() * 3 * w * h);
-        let mut latents = Vec::with_capacity(frames.len() * 4 * lh * lw);
-        for (f, e) in frames.iter().zip(edges) {
+        let n = frames.len();
+        let mode = self.config.mode;
+        let mut control = Vec::with_capacity(n * 3 * w * h);
+        let mut latents = Vec::with_capacity(n * 4 * lh * lw);
+        let mut eps = Vec::new();
+        let mut images = Vec::new();
+        let mut mask_px = Vec::new();
+        for (i, (f, e)) in frames.iter().zip(edges).enumerate() {
             let plane = edge_to_canvas(&e.image, &e.resize, canvas);
             for _ in 0..3 {
                 control.extend_from_slice(&plane);
             }
-            latents.extend(self.initial_noise(f.index, (4, lh, lw)));
+            let (noise, sample) = self.frame_noise(f.index, 4 * lh * lw);
+            latents.extend(noise);
+            if mode.uses_frame() {
+                eps.extend(sample);
+                images.extend(
+                    frame_to_canvas(&f.image, canvas)
+                        .iter()
+                        .map(|v| v * 2.0 - 1.0),
+                );
+            }
+            if let Some(Some(m)) = masks.get(i) {
+                mask_px.extend(m.on_canvas(canvas));
+            }
         }
         let dev = &self.pipeline.device;
-        let n = frames.len();
         let control = Tensor::from_vec(control, (n, 3, h, w), dev)?;
         let latents = Tensor::from_vec(latents, (n, 4, lh, lw), dev)?;
         let params = DenoiseParams {
@@ -106,25 +161,53 @@ impl ControlnetRegenerator {
             conditioning_scale: self.config.conditioning_scale,
             scheduler: self.config.scheduler,
         };
-        let images = self
-            .pipeline
-            .generate(&self.context, &control, &latents, &params)?;
+        let strength = self.config.strength();
+        let images = match mode {
+            RegenMode::Text2img => {
+                self.pipeline
+                    .generate(&self.context, &control, &latents, &params)?
+            }
+            RegenMode::Img2img => self.pipeline.img2img(
+                &self.context,
+                &control,
+                &Tensor::from_vec(images, (n, 3, h, w), dev)?,
+                &Tensor::from_vec(eps, (n, 4, lh, lw), dev)?,
+                &latents,
+                strength,
+                &params,
+            )?,
+            RegenMode::Inpaint => self.pipeline.inpaint(
+                &self.context,
+                &control,
+                &Tensor::from_vec(images, (n, 3, h, w), dev)?,
+                &Tensor::from_vec(mask_px, (n, 1, h, w), dev)?,
+                &Tensor::from_vec(eps, (n, 4, lh, lw), dev)?,
+                &latents,
+                strength,
+                &params,
+            )?,
+        };
         frames
             .iter()
             .enumerate()
             .map(|(i, f)| {
                 let chw = images.get(i)?.flatten_all()?.to_vec1::<f32>()?;
-                Ok(Frame::new(f.index, canvas_to_frame(&chw, canvas)))
+                let mut img = canvas_to_frame(&chw, canvas);
+                if let (true, Some(Some(m))) = (self.config.mask.paste_back, masks.get(i)) {
+                    paste_outside(&mut img, &f.image, m);
+                }
+                Ok(Frame::new(f.index, img))
             })
             .collect()
     }
-}
 
-impl ImageRegenerator for ControlnetRegenerator {
-    fn regenerate(
+    /// Runs the frames whose `masks` entry is not `None` (all of them
+    /// outside inpainting) in batches of one canvas size; the others pass.
+    fn run(
         &mut self,
         frames: &[Frame],
         edges: Option<&[EdgeMap]>,
+        masks: &[Option<LegMask>],
     ) -> Result<Vec<Frame>, StageError> {
         let edges = edges.ok_or_else(|| {
             StageError::BadInput("the controlnet regenerator needs edge maps: set an [edge] kind other than \"none\"".into())
@@ -136,23 +219,93 @@ impl ImageRegenerator for ControlnetRegenerator {
                 edges.len()
             )));
         }
-        let mut out = Vec::with_capacity(frames.len());
+        let inpaint = self.config.mode == RegenMode::Inpaint;
+        let mut out: Vec<Frame> = Vec::with_capacity(frames.len());
         let mut i = 0;
         while i < frames.len() {
+            if inpaint && masks.get(i).is_none_or(Option::is_none) {
+                self.warnings.push(format!(
+                    "frame {}: no leg segment with likelihood >= {} on the original frame's pose; \
+                     handed on unchanged (regenerator.mode = \"inpaint\")",
+                    frames[i].index, self.config.mask.min_likelihood
+                ));
+                out.push(frames[i].clone());
+                i += 1;
+                continue;
+            }
             let canvas = canvas_for(&frames[i], self.config.resolution);
             let mut j = i + 1;
             while j < frames.len()
                 && j - i < self.config.batch
                 && canvas_for(&frames[j], self.config.resolution) == canvas
+                && !(inpaint && masks.get(j).is_none_or(Option::is_none))
             {
                 j += 1;
             }
             let fs: Vec<&Frame> = frames[i..j].iter().collect();
             let es: Vec<&EdgeMap> = edges[i..j].iter().collect();
-            out.extend(self.run_group(&fs, &es, &canvas)?);
+            let ms: Vec<Option<&LegMask>> = (i..j)
+                .map(|k| masks.get(k).and_then(Option::as_ref))
+                .collect();
+            out.extend(self.run_group(&fs, &es, &ms, &canvas)?);
             i = j;
         }
         Ok(out)
+    }
+}
+
+impl ImageRegenerator for ControlnetRegenerator {
+    fn regenerate(
+        &mut self,
+        frames: &[Frame],
+        edges: Option<&[EdgeMap]>,
+    ) -> Result<Vec<Frame>, StageError> {
+        if self.config.mode == RegenMode::Inpaint {
+            return Err(StageError::BadInput(
+                "regenerator.mode = \"inpaint\" needs the pose of each original frame to draw \
+                 the leg mask, and this pipeline did not pass any (ImageRegenerator::regenerate_with_poses)"
+                    .into(),
+            ));
+        }
+        self.run(frames, edges, &[])
+    }
+
+    fn regenerate_with_poses(
+        &mut self,
+        frames: &[Frame],
+        edges: Option<&[EdgeMap]>,
+        poses: &[Pose],
+    ) -> Result<Vec<Frame>, StageError> {
+        if self.config.mode != RegenMode::Inpaint {
+            return self.run(frames, edges, &[]);
+        }
+        if poses.len() != frames.len() {
+            return Err(StageError::BadInput(format!(
+                "{} frames but {} original-frame poses",
+                frames.len(),
+                poses.len()
+            )));
+        }
+        let masks: Vec<Option<LegMask>> = poses
+            .iter()
+            .map(|p| LegMask::from_pose(p, &self.config.mask))
+            .collect();
+        self.run(frames, edges, &masks)
+    }
+
+    fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.warnings)
+    }
+}
+
+/// Puts `original`'s pixels back wherever `mask` does not regenerate.
+fn paste_outside(img: &mut image::RgbImage, original: &image::RgbImage, mask: &LegMask) {
+    for (x, y, p) in img.enumerate_pixels_mut() {
+        if !mask.contains(f64::from(x), f64::from(y))
+            && let Some(o) = original.get_pixel_checked(x, y)
+        {
+            *p = *o;
+        }
     }
 }
 

@@ -46,6 +46,34 @@ pub fn edge_to_canvas(edge: &image::GrayImage, edge_map: &Resize, canvas: &Resiz
     out
 }
 
+/// Renders an RGB frame onto its canvas; returns planar `(3, height, width)`
+/// values in [0, 1] (image-to-image and inpainting start from it).
+pub fn frame_to_canvas(frame: &image::RgbImage, canvas: &Resize) -> Vec<f32> {
+    let (w, h) = (canvas.dst_width, canvas.dst_height);
+    let plane = (w * h) as usize;
+    let mut out = vec![0f32; 3 * plane];
+    let mut px = [0f32; 3];
+    for y in 0..h {
+        for x in 0..w {
+            let (fx, fy) = canvas.to_source(f64::from(x), f64::from(y));
+            sample(
+                frame.as_raw(),
+                frame.width(),
+                frame.height(),
+                3,
+                fx,
+                fy,
+                &mut px,
+            );
+            let i = (y * w + x) as usize;
+            for (k, v) in px.iter().enumerate() {
+                out[k * plane + i] = v / 255.0;
+            }
+        }
+    }
+    out
+}
+
 /// Resamples a canvas image (RGB, values in [0, 1], planar CHW) back to the frame.
 pub fn canvas_to_frame(chw: &[f32], canvas: &Resize) -> image::RgbImage {
     let (cw, ch) = (canvas.dst_width, canvas.dst_height);
@@ -94,6 +122,16 @@ mod tests {
         );
         assert_eq!(v.len(), 400);
         assert!(v.iter().all(|&x| (x - 1.0).abs() < 1e-6));
+    }
+
+    #[test]
+    fn frame_onto_an_identity_canvas_is_planar_and_exact() {
+        let f = image::RgbImage::from_fn(4, 2, |x, y| image::Rgb([x as u8, y as u8, 255]));
+        let v = frame_to_canvas(&f, &Resize::identity(4, 2));
+        assert_eq!(v.len(), 24);
+        assert_eq!(v[5], 1.0 / 255.0); // red plane, pixel (1, 1)
+        assert_eq!(v[8 + 4], 1.0 / 255.0); // green plane, pixel (0, 1)
+        assert!(v[16..].iter().all(|&b| b == 1.0));
     }
 
     #[test]

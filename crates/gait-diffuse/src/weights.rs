@@ -17,6 +17,7 @@ use crate::DiffuseError;
 use crate::clip_text::ClipTextModel;
 use crate::controlnet::ControlNet;
 use crate::model_config::{TextConfig, UnetConfig, VaeConfig, read_config};
+use crate::vae_encoder::VaeEncoder;
 
 /// Weight file of each component inside the SD folder (diffusers layout).
 pub const UNET_FILE: &str = "unet/diffusion_pytorch_model.safetensors";
@@ -74,6 +75,8 @@ pub struct Models {
     pub text: ClipTextModel,
     pub vae_config: VaeConfig,
     pub text_config: TextConfig,
+    /// Image-to-image and inpainting only (see [`Models::load_vae_encoder`]).
+    pub vae_encoder: Option<VaeEncoder>,
 }
 
 impl Models {
@@ -127,7 +130,23 @@ impl Models {
             text,
             vae_config,
             text_config,
+            vae_encoder: None,
         })
+    }
+
+    /// Loads the VAE encoder too (from the same file as the decoder), for
+    /// the modes that start from the frame.
+    pub fn load_vae_encoder(
+        &mut self,
+        sd_dir: &Path,
+        dtype: DType,
+        device: &Device,
+    ) -> Result<(), DiffuseError> {
+        let path = sd_dir.join(VAE_FILE);
+        let enc = VaeEncoder::new(var_builder(&path, dtype, device)?, &self.vae_config)
+            .map_err(|e| DiffuseError::bad_model(&path, e))?;
+        self.vae_encoder = Some(enc);
+        Ok(())
     }
 }
 

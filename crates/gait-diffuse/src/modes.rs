@@ -1,0 +1,233 @@
+//! Image-to-image and inpainting from the original frame, as diffusers'
+//! StableDiffusionControlNetImg2ImgPipeline and
+//! StableDiffusionControlNetInpaintPipeline (4-channel UNet, as SD 1.5) do:
+//! the frame's VAE latents are noised to the start timestep that `strength`
+//! picks and denoised from there; inpainting puts the unmasked latents
+//! (noised to the next timestep) back after every step.
+
+use std::path::Path;
+
+use candle_core::{DType, Device, Tensor};
+use serde::{Deserialize, Serialize};
+
+use crate::DiffuseError;
+use crate::pipeline::{ControlnetPipeline, DenoiseParams};
+use crate::schedule::Scheduler;
+use crate::tokenizer::ClipTokenizer;
+use crate::weights::{MERGES_FILE, Models};
+
+/// Where the denoising starts (`mode = "..."` in `[regenerator]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RegenMode {
+    /// From noise, conditioned on the edge map only (the paper).
+    #[default]
+    Text2img,
+    /// From the frame, noised by `strength`: colour and layout are kept.
+    Img2img,
+    /// Only the leg mask built from the original frame's pose is redrawn.
+    Inpaint,
+}
+
+impl RegenMode {
+    /// The name used in the TOML.
+    pub fn name(self) -> &'static str {
+        match self {
+            RegenMode::Text2img => "text2img",
+            RegenMode::Img2img => "img2img",
+            RegenMode::Inpaint => "inpaint",
+        }
+    }
+
+    /// diffusers' default strength for the mode (its pipelines' `strength=`).
+    pub fn default_strength(self) -> f64 {
+        match self {
+            RegenMode::Img2img => 0.8,
+            RegenMode::Text2img | RegenMode::Inpaint => 1.0,
+        }
+    }
+
+    /// True when the mode starts from the frame (needs the VAE encoder).
+    pub fn uses_frame(self) -> bool {
+        !matches!(self, RegenMode::Text2img)
+    }
+}
+
+/// The first scheduler step run at `strength` (diffusers' `get_timesteps`:
+/// `steps - min(int(steps * strength), steps)`); an error when `strength` is
+/// outside (0, 1] or leaves no step to run.
+pub fn begin_step(steps: usize, strength: f64) -> Result<usize, DiffuseError> {
+    if !(strength > 0.0 && strength <= 1.0) {
+        return Err(DiffuseError::Config(format!(
+            "regenerator.strength = {strength} must be in (0, 1]"
+        )));
+    }
+    let run = ((steps as f64 * strength) as usize).min(steps);
+    if run == 0 {
+        return Err(DiffuseError::Config(format!(
+            "regenerator.strength = {strength} with steps = {steps} runs no denoising step \
+             (steps * strength must be at least 1)"
+        )));
+    }
+    Ok(steps - run)
+}
+
+/// Inpainting's known region: the frame's latents, the noise they get and the
+/// latent-size mask (1 = regenerate).
+pub struct KeepRegion {
+    pub image_latents: Tensor,
+    pub noise: Tensor,
+    pub mask: Tensor,
+}
+
+impl KeepRegion {
+    /// `mask * x + (1 - mask) * known`, the known latents noised to `next_t`
+    /// (none after the last step).
+    pub(crate) fn blend(
+        &self,
+        sched: &Scheduler,
+        x: &Tensor,
+        next_t: Option<usize>,
+    ) -> Result<Tensor, DiffuseError> {
+        let known = match next_t {
+            Some(t) => sched.add_noise(&self.image_latents, &self.noise, t)?,
+            None => self.image_latents.clone(),
+        };
+        let keep = (1.0 - &self.mask)?;
+        Ok((x.broadcast_mul(&self.mask)? + known.broadcast_mul(&keep)?)?)
+    }
+}
+
+/// A pixel mask `(B, 1, H, W)` in [0, 1] as diffusers' inpainting uses it:
+/// binarized at 0.5, then nearest-downsampled to the latents by `scale`.
+pub fn latent_mask(mask: &Tensor, scale: usize) -> Result<Tensor, DiffuseError> {
+    let (b, _, h, w) = mask.dims4()?;
+    let binary = mask.ge(0.5)?.to_dtype(mask.dtype())?;
+    let (lh, lw) = (h / scale, w / scale);
+    // torch's "nearest" with an integer factor picks pixel (scale*i, scale*j).
+    Ok(binary
+        .narrow(2, 0, lh * scale)?
+        .narrow(3, 0, lw * scale)?
+        .reshape((b, 1, lh, scale, lw, scale))?
+        .narrow(3, 0, 1)?
+        .narrow(5, 0, 1)?
+        .reshape((b, 1, lh, lw))?)
+}
+
+impl ControlnetPipeline {
+    /// As [`ControlnetPipeline::load`], with the VAE encoder that
+    /// image-to-image and inpainting need.
+    pub fn load_with_encoder(
+        sd_dir: &Path,
+        controlnet_dir: &Path,
+        dtype: DType,
+        device: &Device,
+    ) -> Result<Self, DiffuseError> {
+        let mut models = Models::load(sd_dir, controlnet_dir, dtype, device)?;
+        models.load_vae_encoder(sd_dir, dtype, device)?;
+        let tokenizer = ClipTokenizer::from_merges_file(&sd_dir.join(MERGES_FILE))?;
+        Ok(Self::from_parts(Box::new(models), tokenizer, dtype, device))
+    }
+
+    /// Scaled latents of `images` `(B, 3, H, W)` in [-1, 1]: a sample
+    /// `mean + std * eps` of the VAE's distribution with the caller's standard
+    /// normals `eps` (what diffusers does when given a generator), times the
+    /// VAE's scaling factor.
+    pub fn encode_latents(&self, images: &Tensor, eps: &Tensor) -> Result<Tensor, DiffuseError> {
+        let (mean, std) = self.models.encode_image(&images.to_dtype(self.dtype)?)?;
+        let z = (mean + std.mul(&eps.to_dtype(self.dtype)?)?)?;
+        Ok((z * self.models.vae_config().scaling_factor)?)
+    }
+
+    /// Image-to-image: the frames' latents (`eps` for the VAE sample) noised
+    /// with `noise` to the start timestep of `strength`, then denoised under
+    /// `control`. Returns images in [0, 1] as [`ControlnetPipeline::generate`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn img2img(
+        &self,
+        context: &Tensor,
+        control: &Tensor,
+        images: &Tensor,
+        eps: &Tensor,
+        noise: &Tensor,
+        strength: f64,
+        p: &DenoiseParams,
+    ) -> Result<Tensor, DiffuseError> {
+        let begin = begin_step(p.steps, strength)?;
+        let latents = self.encode_latents(images, eps)?;
+        let sched = Scheduler::new(p.scheduler, p.steps);
+        let x = sched.add_noise(
+            &latents,
+            &noise.to_dtype(self.dtype)?,
+            sched.timesteps()[begin],
+        )?;
+        self.denoise(context, control, &x, p, begin, None)
+    }
+
+    /// Inpainting: as [`Self::img2img`], but only where `mask` `(B, 1, H, W)`
+    /// (1 = regenerate) is set; at strength 1 the start is pure noise, as in
+    /// diffusers.
+    #[allow(clippy::too_many_arguments)]
+    pub fn inpaint(
+        &self,
+        context: &Tensor,
+        control: &Tensor,
+        images: &Tensor,
+        mask: &Tensor,
+        eps: &Tensor,
+        noise: &Tensor,
+        strength: f64,
+        p: &DenoiseParams,
+    ) -> Result<Tensor, DiffuseError> {
+        let begin = begin_step(p.steps, strength)?;
+        let latents = self.encode_latents(images, eps)?;
+        let noise = noise.to_dtype(self.dtype)?;
+        let sched = Scheduler::new(p.scheduler, p.steps);
+        // DDIM's and UniPC's initial noise sigma is 1.
+        let x = if strength >= 1.0 {
+            noise.clone()
+        } else {
+            sched.add_noise(&latents, &noise, sched.timesteps()[begin])?
+        };
+        let keep = KeepRegion {
+            image_latents: latents,
+            noise,
+            mask: latent_mask(&mask.to_dtype(self.dtype)?, self.vae_scale())?,
+        };
+        self.denoise(context, control, &x, p, begin, Some(&keep))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn begin_step_follows_diffusers_get_timesteps() {
+        assert_eq!(begin_step(3, 0.75).unwrap(), 1);
+        assert_eq!(begin_step(20, 0.8).unwrap(), 4);
+        assert_eq!(begin_step(20, 1.0).unwrap(), 0);
+        assert_eq!(begin_step(10, 0.15).unwrap(), 9);
+        for bad in [0.0, -0.1, 1.5, f64::NAN] {
+            let err = begin_step(20, bad).unwrap_err().to_string();
+            assert!(err.contains("strength"), "{err}");
+        }
+        let err = begin_step(3, 0.2).unwrap_err().to_string();
+        assert!(err.contains("no denoising step"), "{err}");
+    }
+
+    #[test]
+    fn latent_mask_binarizes_and_picks_every_scale_th_pixel() {
+        let mut v = vec![0f32; 16 * 16];
+        v[0] = 0.6; // (0, 0) -> cell (0, 0)
+        v[8 * 16 + 1] = 1.0; // (8, 1): not a sampled pixel
+        v[8 * 16 + 8] = 0.4; // below 0.5
+        v[8] = 0.5; // (0, 8) -> cell (0, 1)
+        let m = Tensor::from_vec(v, (1, 1, 16, 16), &Device::Cpu).unwrap();
+        let lm = latent_mask(&m, 8).unwrap();
+        assert_eq!(
+            lm.flatten_all().unwrap().to_vec1::<f32>().unwrap(),
+            vec![1.0, 1.0, 0.0, 0.0]
+        );
+    }
+}
