@@ -357,3 +357,66 @@ fn bad_strengths_and_unsupported_backends_are_named() {
         "{files:?}"
     );
 }
+
+#[test]
+fn half_precision_modes_track_the_reference() {
+    let e = modes();
+    let pipe = ControlnetPipeline::load_with_encoder(
+        &tiny(),
+        &tiny().join("controlnet"),
+        DType::F16,
+        &Device::Cpu,
+    )
+    .unwrap();
+    let ctx = pipe
+        .context(
+            gait_diffuse::PAPER_PROMPT,
+            gait_diffuse::PAPER_NEGATIVE_PROMPT,
+            7.5,
+        )
+        .unwrap();
+    let p = params(SchedulerKind::Unipc);
+    let img = pipe
+        .img2img(
+            &ctx,
+            &control(&e),
+            &init_image(&e),
+            &e["modes.enc_eps"],
+            &e["modes.noise"],
+            0.75,
+            &p,
+        )
+        .unwrap();
+    assert_eq!(img.dtype(), DType::F32);
+    // As dtypes.rs: f16 weights and activations, within 5e-2 of f32 diffusers.
+    assert_close(
+        "img2img f16",
+        &img,
+        &e["modes.tanh.img2img.unipc.image"],
+        5e-2,
+    );
+    let mask = (&e["modes.mask"] / 255.0)
+        .unwrap()
+        .unsqueeze(0)
+        .unwrap()
+        .unsqueeze(0)
+        .unwrap();
+    let img = pipe
+        .inpaint(
+            &ctx,
+            &control(&e),
+            &init_image(&e),
+            &mask,
+            &e["modes.enc_eps"],
+            &e["modes.noise"],
+            0.75,
+            &p,
+        )
+        .unwrap();
+    assert_close(
+        "inpaint f16",
+        &img,
+        &e["modes.tanh.inpaint.unipc.image"],
+        5e-2,
+    );
+}
