@@ -6,7 +6,9 @@ use gait_core::keypoint::canonical_index;
 use gait_core::{Pose, Resize};
 use serde::{Deserialize, Serialize};
 
-/// The `[regenerator.mask]` table.
+/// The `[regenerator.mask]` table. A frame whose original-frame pose has no
+/// leg segment (both ends found with `min_likelihood`) is handed on
+/// unchanged, with a note in the run's warnings, rather than failing the run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LegMaskConfig {
