@@ -27,20 +27,7 @@ const NAMES: [&str; 15] = [
 ];
 
 fn run_args(out: &Path, first: usize, last: usize) -> std::process::Command {
-    let mut cmd = gait();
-    cmd.args(["run", "--no-progress", "--models-dir"])
-        .arg(models_dir())
-        .arg("--input")
-        .arg(sample_video())
-        .arg("--out")
-        .arg(out)
-        .args([
-            "--set",
-            &format!("input.first_frame={first}"),
-            "--set",
-            &format!("input.last_frame={last}"),
-        ]);
-    cmd
+    common::sample_run(out, first, last)
 }
 
 /// Data rows of keypoints.csv: (frame, values).

@@ -5,38 +5,14 @@
 
 mod common;
 
-use common::{fails_with, gait, models_dir, read_json, run_ok, sample_video};
+use common::{fails_with, gait, models_dir, read_json, run_ok, sample_run, sample_video};
+use gait_core::keypoint::LOWER_LIMB as LOWER;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use std::process::Command;
 
-const LOWER: [&str; 10] = [
-    "left_hip",
-    "right_hip",
-    "left_knee",
-    "right_knee",
-    "left_ankle",
-    "right_ankle",
-    "left_heel",
-    "right_heel",
-    "left_toe",
-    "right_toe",
-];
-
 fn run_args(out: &Path, first: usize, last: usize, sets: &[&str]) -> Command {
-    let mut cmd = gait();
-    cmd.args(["run", "--no-progress", "--models-dir"])
-        .arg(models_dir())
-        .arg("--input")
-        .arg(sample_video())
-        .arg("--out")
-        .arg(out)
-        .args([
-            "--set",
-            &format!("input.first_frame={first}"),
-            "--set",
-            &format!("input.last_frame={last}"),
-        ]);
+    let mut cmd = sample_run(out, first, last);
     for s in sets {
         cmd.args(["--set", s]);
     }

@@ -23,6 +23,25 @@ pub fn gait() -> Command {
     Command::new(env!("CARGO_BIN_EXE_gait"))
 }
 
+/// `gait run` on frames `first..=last` of the sample video with the test
+/// models, writing to `out`.
+pub fn sample_run(out: &Path, first: usize, last: usize) -> Command {
+    let mut cmd = gait();
+    cmd.args(["run", "--no-progress", "--models-dir"])
+        .arg(models_dir())
+        .arg("--input")
+        .arg(sample_video())
+        .arg("--out")
+        .arg(out)
+        .args([
+            "--set",
+            &format!("input.first_frame={first}"),
+            "--set",
+            &format!("input.last_frame={last}"),
+        ]);
+    cmd
+}
+
 pub fn run_ok(cmd: &mut Command) -> Output {
     let out = cmd.output().expect("gait runs");
     assert!(

@@ -23,6 +23,21 @@ pub const CANONICAL: [&str; 15] = [
     "right_toe",
 ];
 
+/// The lower-limb keypoints of [`CANONICAL`]: what the kinematics and the
+/// selective regeneration look at.
+pub const LOWER_LIMB: [&str; 10] = [
+    "left_hip",
+    "right_hip",
+    "left_knee",
+    "right_knee",
+    "left_ankle",
+    "right_ankle",
+    "left_heel",
+    "right_heel",
+    "left_toe",
+    "right_toe",
+];
+
 /// A 2-D keypoint in pixel coordinates (x right, y down, the centre of pixel
 /// (i, j) at (i, j)) with the model's likelihood in [0, 1].
 ///

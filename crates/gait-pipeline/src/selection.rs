@@ -3,6 +3,7 @@
 //! frame only. This file holds the `[selection]` config and the poor-frame
 //! rule; `interpolate.rs` fills the skipped frames.
 
+use gait_core::keypoint::LOWER_LIMB;
 use std::collections::BTreeMap;
 
 use gait_core::Pose;
@@ -52,20 +53,6 @@ pub struct SelectionConfig {
     /// heels and toes here.
     pub keypoints: Vec<String>,
 }
-
-/// The lower-limb keypoints of the canonical layout.
-pub const LOWER_LIMB: [&str; 10] = [
-    "left_hip",
-    "right_hip",
-    "left_knee",
-    "right_knee",
-    "left_ankle",
-    "right_ankle",
-    "left_heel",
-    "right_heel",
-    "left_toe",
-    "right_toe",
-];
 
 impl Default for SelectionConfig {
     fn default() -> Self {
