@@ -66,7 +66,13 @@ fn openpose_runs_as_the_pose_stage() {
     );
     let csv = std::fs::read_to_string(out.join("keypoints.csv")).unwrap();
     let parts: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
-    for name in ["left_heel", "right_toe", "mid_hip", "op_neck", "op_left_ear"] {
+    for name in [
+        "left_heel",
+        "right_toe",
+        "mid_hip",
+        "op_neck",
+        "op_left_ear",
+    ] {
         assert!(parts.contains(&name), "no {name} column: {parts:?}");
     }
     assert_eq!(csv.lines().count(), 3 + 2, "two frames");
@@ -80,5 +86,8 @@ fn openpose_runs_as_the_pose_stage() {
         "{models_used:?}"
     );
     let warnings = manifest["warnings"].to_string();
-    assert!(warnings.contains("ankle angle is unavailable"), "{warnings}");
+    assert!(
+        warnings.contains("ankle angle is unavailable"),
+        "{warnings}"
+    );
 }
