@@ -202,6 +202,8 @@ pub enum Component {
     ControlNet,
     Vae,
     TextEncoder,
+    /// The encoder half of the VAE file (image-to-image and inpainting).
+    VaeEncoder,
 }
 
 /// Names and shapes our loader requests for `component` with the given
@@ -224,6 +226,7 @@ pub fn requested_tensors(
         Component::ControlNet => ControlNet::new(vb, unet).map(|_| ())?,
         Component::Vae => AutoEncoderKL::new(vb, 3, 3, vae.to_candle()).map(|_| ())?,
         Component::TextEncoder => ClipTextModel::new(vb, text).map(|_| ())?,
+        Component::VaeEncoder => VaeEncoder::new(vb, vae).map(|_| ())?,
     }
     let seen = rec.seen.lock().map(|s| s.clone()).unwrap_or_default();
     Ok(seen)

@@ -420,3 +420,38 @@ fn half_precision_modes_track_the_reference() {
         5e-2,
     );
 }
+
+#[test]
+fn vae_encoder_asks_for_exactly_the_real_vae_encoder_tensors() {
+    use gait_diffuse::model_config::{TextConfig, UnetConfig, VaeConfig};
+    use gait_diffuse::weights::{Component, requested_tensors};
+    use std::collections::BTreeMap;
+
+    let text = std::fs::read_to_string(fixtures().join("sd15_manifest.json")).unwrap();
+    let manifest: BTreeMap<String, BTreeMap<String, Vec<usize>>> =
+        serde_json::from_str(&text).unwrap();
+    let want: BTreeMap<&String, &Vec<usize>> = manifest["vae"]
+        .iter()
+        .filter(|(k, _)| k.starts_with("encoder.") || k.starts_with("quant_conv."))
+        .collect();
+    let got = requested_tensors(
+        Component::VaeEncoder,
+        &UnetConfig::default(),
+        &VaeConfig::default(),
+        &TextConfig::default(),
+        manifest["vae"].keys().cloned().collect(),
+    )
+    .unwrap();
+    let got_names: Vec<&String> = got.keys().collect();
+    let want_names: Vec<&String> = want.keys().copied().collect();
+    assert_eq!(got_names, want_names);
+    for (name, shape) in want {
+        // The mid-block attention's linear weights are 1x1 convolutions in some files.
+        let ours = &got[name];
+        assert!(
+            ours == shape || ours.iter().product::<usize>() == shape.iter().product::<usize>(),
+            "{name}: requested {ours:?}, checkpoint has {shape:?}"
+        );
+    }
+    println!("vae encoder: {} tensors match", got.len());
+}
