@@ -341,3 +341,52 @@ fn plugin_edge_stage_from_config() {
         &["libx.so"],
     );
 }
+
+#[test]
+fn inpainting_runs_on_a_pose_of_the_original_frames() {
+    // The tiny random SD 1.5 + ControlNet of gait-diffuse's fixtures: the
+    // images are noise, but the wiring is real: a pose pass on the original
+    // frames, leg masks from it, and a cache that knows the mask depends on it.
+    let tiny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../gait-diffuse/tests/fixtures/tiny");
+    let dir = tempfile::tempdir().unwrap();
+    let cache = format!("run.cache_dir={}", dir.path().join("cache").display());
+    let sd = format!("regenerator.sd_path={:?}", tiny.display().to_string());
+    let cn = format!(
+        "regenerator.controlnet_path={:?}",
+        tiny.join("controlnet").display().to_string()
+    );
+    let run = |out: &Path, extra: &[&str]| {
+        let mut cmd = common::sample_run(out, 150, 151);
+        for s in [
+            "edge.kind=\"canny\"",
+            "regenerator.kind=\"controlnet\"",
+            "regenerator.mode=\"inpaint\"",
+            "regenerator.resolution=64",
+            "regenerator.steps=2",
+            "regenerator.mask.paste_back=true",
+            &sd,
+            &cn,
+            &cache,
+        ]
+        .iter()
+        .chain(extra)
+        {
+            cmd.args(["--set", s]);
+        }
+        run_ok(&mut cmd);
+        common::read_json(&out.join("run.json"))
+    };
+    let first = run(&dir.path().join("a"), &[]);
+    let stage = |m: &serde_json::Value, s: &str, k: &str| m["stages"][s][k].as_u64().unwrap();
+    assert_eq!(stage(&first, "original-pose", "computed"), 2);
+    assert_eq!(stage(&first, "regenerator", "computed"), 2);
+    assert!(dir.path().join("a/keypoints_original.csv").is_file());
+    // Same settings: the poses come from the cache, nothing is redrawn.
+    let again = run(&dir.path().join("b"), &[]);
+    assert_eq!(stage(&again, "pose", "cached"), 2);
+    assert_eq!(stage(&again, "regenerator", "computed"), 0);
+    // Another pose setting changes the masks, so the images are redrawn
+    // rather than taken from the cache.
+    let other = run(&dir.path().join("c"), &["pose.person=\"leftmost\""]);
+    assert_eq!(stage(&other, "regenerator", "computed"), 2);
+}

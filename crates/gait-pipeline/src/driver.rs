@@ -71,6 +71,9 @@ pub(crate) struct Driver<'a> {
     pub(crate) last_estimated: Option<usize>,
     /// Frames whose pose came from the cache.
     pub(crate) cached_frames: BTreeSet<usize>,
+    /// Poses on the original frames, for regenerators that need them
+    /// (inpainting a leg mask); `None` when the regenerator does not.
+    pub(crate) original_poses: Option<BTreeMap<usize, Pose>>,
 }
 
 impl Driver<'_> {
@@ -196,10 +199,26 @@ impl Driver<'_> {
         }
         let edges = self.edges(&todo)?;
         let t = Instant::now();
-        let redrawn = self
-            .stages
-            .regenerator
-            .regenerate(&todo, edges.as_deref())?;
+        let redrawn = match &self.original_poses {
+            Some(found) => {
+                let poses: Vec<Pose> = todo
+                    .iter()
+                    .map(|f| {
+                        found
+                            .get(&f.index)
+                            .cloned()
+                            .unwrap_or_else(|| Pose::empty(self.n_keypoints))
+                    })
+                    .collect();
+                self.stages
+                    .regenerator
+                    .regenerate_with_poses(&todo, edges.as_deref(), &poses)?
+            }
+            None => self
+                .stages
+                .regenerator
+                .regenerate(&todo, edges.as_deref())?,
+        };
         self.record("regenerator").seconds += t.elapsed().as_secs_f64();
         self.record("regenerator").computed += todo.len();
         if redrawn.len() != todo.len()

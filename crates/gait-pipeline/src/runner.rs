@@ -91,25 +91,33 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let regen_models = model_records(config.regenerator.model_files(&ctx));
     let pose_models = model_records(config.pose.model_files(&ctx));
     let edge_key = chain_key(&input_key, "edge", &(&config.edge, &edge_models));
-    let regen_key = chain_key(
-        &edge_key,
-        "regenerator",
-        &(&config.regenerator, &regen_models),
-    );
-    // A tracking estimator's result depends on the frames it saw before,
-    // so the pose key covers the first frame, the stride and, with selective
-    // regeneration, the rule that picks the frames. Edge maps and regenerated
-    // images do not: changing the rule reuses every image already regenerated.
     let start = config.input.first_frame;
-    let pose_key = match sel.tracking_key() {
-        None => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, start)),
-        Some(t) => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, &t, start)),
-    };
     let original_key = chain_key(
         &input_key,
         ORIGINAL_POSE,
         &(&config.pose, &pose_models, sel.stride, start),
     );
+    // An inpainting regenerator draws inside a mask made from the original
+    // frame's pose, so its images depend on that pose too.
+    let needs_poses = config.regenerator.needs_poses();
+    let regen_key = chain_key(
+        &edge_key,
+        "regenerator",
+        &(
+            &config.regenerator,
+            &regen_models,
+            needs_poses.then_some(&original_key),
+        ),
+    );
+    // A tracking estimator's result depends on the frames it saw before,
+    // so the pose key covers the first frame, the stride and, with selective
+    // regeneration, the rule that picks the frames. Edge maps and regenerated
+    // images do not: changing the rule reuses every image already regenerated.
+    let pose_key = match sel.tracking_key() {
+        None => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, start)),
+        Some(t) => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, &t, start)),
+    };
+    let original_pass = poor_mode || needs_poses;
     let caches = if config.run.cache {
         let root = config
             .run
@@ -120,7 +128,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
             edge: StageCache::open(&root, "edge", &edge_key, &config.edge)?,
             regenerator: StageCache::open(&root, "regenerator", &regen_key, &config.regenerator)?,
             pose: StageCache::open(&root, "pose", &pose_key, &config.pose)?,
-            original: if poor_mode {
+            original: if original_pass {
                 StageCache::open(&root, ORIGINAL_POSE, &original_key, &config.pose)?
             } else {
                 StageCache::disabled()
@@ -148,7 +156,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
             },
         );
     }
-    if poor_mode {
+    if original_pass {
         let kind = records["pose"].kind.clone();
         records.insert(
             ORIGINAL_POSE.to_string(),
@@ -213,7 +221,10 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
                 frames: poor,
                 stride,
             };
-            let second_pass = tools.pass(&caches, &caches.pose, true, order);
+            let mut second_pass = tools.pass(&caches, &caches.pose, true, order);
+            if needs_poses {
+                second_pass.original_poses = Some(original.iter().cloned().collect());
+            }
             let (_, found, cached) =
                 second_pass.stream(&info, &bar, &|f, _| wanted.contains(&f))?;
             bar.finish_and_clear();
@@ -235,6 +246,19 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
             })
             .collect();
         (all, processed, from_cache, Some(original))
+    } else if needs_poses {
+        // Inpainting without selection: poses on the original frames for
+        // the leg masks, then every grid frame through the regenerator.
+        let bar = progress_bar(opts.progress, total, "original frames");
+        let first_pass = tools.pass(&caches, &caches.original, false, grid.clone());
+        let (_, original, _) = first_pass.stream(&info, &bar, &on_grid)?;
+        bar.finish_and_clear();
+        let bar = progress_bar(opts.progress, total, "");
+        let mut second_pass = tools.pass(&caches, &caches.pose, true, grid);
+        second_pass.original_poses = Some(original.iter().cloned().collect());
+        let (all, processed, cached) = second_pass.stream(&info, &bar, &on_grid)?;
+        bar.finish_and_clear();
+        (all, processed, cached.len(), Some(original))
     } else {
         let bar = progress_bar(opts.progress, total, "");
         let only_pass = tools.pass(&caches, &caches.pose, true, grid);
@@ -242,6 +266,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         bar.finish_and_clear();
         (all, processed, cached.len(), None)
     };
+    let regenerator_warnings = tools.stages.regenerator.take_warnings();
     if all.is_empty() {
         return Err(PipelineError::input(
             &opts.input,
@@ -308,7 +333,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         frames_from_cache: from_cache,
         selection: record,
         keypoint_names: names,
-        warnings: Vec::new(),
+        warnings: regenerator_warnings,
         extra: BTreeMap::new(),
     };
     let mut summary = RunSummary {
@@ -375,6 +400,7 @@ impl<'t> Tools<'t> {
             order,
             last_estimated: None,
             cached_frames: BTreeSet::new(),
+            original_poses: None,
         }
     }
 }
