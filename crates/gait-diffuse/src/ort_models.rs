@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use candle_core::{DType, Device, Tensor};
-use ort::session::Session;
+use gait_ort::Session;
 use ort::value::DynTensor;
 
 use crate::DiffuseError;
@@ -74,18 +74,9 @@ struct OnnxNet {
 
 impl OnnxNet {
     fn load(path: &Path) -> Result<Self, DiffuseError> {
-        let env = gait_ort::environment().map_err(DiffuseError::Ort)?;
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let bad = |e: ort::Error<_>| DiffuseError::bad_model(path, e);
-        let session = Session::builder(&env)
-            .map_err(|e| DiffuseError::bad_model(path, e))?
-            .with_intra_threads(threads)
-            .map_err(bad)?
-            // Busy-waiting workers steal the cores other stages (and other
-            // processes on a small machine) need between the large ops.
-            .with_intra_op_spinning(false)
-            .map_err(bad)?
-            .commit_from_file(path)
+        // A missing runtime is its own error, not a fault of this model file.
+        gait_ort::environment().map_err(DiffuseError::Ort)?;
+        let session = gait_ort::session(path, gait_ort::Device::Cpu)
             .map_err(|e| DiffuseError::bad_model(path, e))?;
         let inputs = session
             .inputs()
