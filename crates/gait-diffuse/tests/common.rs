@@ -65,3 +65,81 @@ pub fn require_ort() {
          (from the PyPI onnxruntime==1.31.1 wheel; tools/setup.sh fetches it, tools/test.sh sets it)"
     );
 }
+
+/// The complete 2-step pipeline (DDIM and UniPC) on the fixture's edge map
+/// and latents against diffusers' images, within `tol` relative.
+pub fn check_two_step_pipeline(label: &str, pipe: &gait_diffuse::ControlnetPipeline, tol: f64) {
+    use gait_diffuse::{DenoiseParams, SchedulerKind};
+    let e = expected();
+    let ctx = paper_context(pipe);
+    let edge = (e["pipe.edge"].to_dtype(DType::F32).unwrap() / 255.0).unwrap();
+    let control = Tensor::stack(&[&edge, &edge, &edge], 0)
+        .unwrap()
+        .unsqueeze(0)
+        .unwrap();
+    for (name, kind) in [
+        ("ddim", SchedulerKind::Ddim),
+        ("unipc", SchedulerKind::Unipc),
+    ] {
+        let p = DenoiseParams {
+            steps: 2,
+            guidance_scale: 7.5,
+            conditioning_scale: 0.8,
+            scheduler: kind,
+        };
+        let img = pipe
+            .generate(&ctx, &control, &e["pipe.latents"], &p)
+            .unwrap();
+        assert_close(
+            &format!("{label} {name}"),
+            &img,
+            &e[&format!("pipe.{name}.image")],
+            tol,
+        );
+    }
+}
+
+/// Tensors written by tools/diffuse/make_modes_fixtures.py (img2img, inpaint).
+pub fn modes() -> HashMap<String, Tensor> {
+    candle_core::safetensors::load(fixtures().join("modes.safetensors"), &Device::Cpu)
+        .expect("modes.safetensors")
+}
+
+/// The modes fixture's edge map as the 1x3xHxW control image in [0, 1].
+pub fn modes_control(e: &HashMap<String, Tensor>) -> Tensor {
+    let edge = (&e["modes.edge"] / 255.0).unwrap();
+    Tensor::stack(&[&edge, &edge, &edge], 0)
+        .unwrap()
+        .unsqueeze(0)
+        .unwrap()
+}
+
+/// The modes fixture's inpainting mask as 1x1xHxW in [0, 1].
+pub fn modes_mask(e: &HashMap<String, Tensor>) -> Tensor {
+    (&e["modes.mask"] / 255.0)
+        .unwrap()
+        .unsqueeze(0)
+        .unwrap()
+        .unsqueeze(0)
+        .unwrap()
+}
+
+/// The denoising settings the modes fixtures were made with.
+pub fn modes_params(kind: gait_diffuse::SchedulerKind) -> gait_diffuse::DenoiseParams {
+    gait_diffuse::DenoiseParams {
+        steps: 3,
+        guidance_scale: 7.5,
+        conditioning_scale: 0.8,
+        scheduler: kind,
+    }
+}
+
+/// The paper's prompts, guidance 7.5, encoded by `pipe`.
+pub fn paper_context(pipe: &gait_diffuse::ControlnetPipeline) -> Tensor {
+    pipe.context(
+        gait_diffuse::PAPER_PROMPT,
+        gait_diffuse::PAPER_NEGATIVE_PROMPT,
+        7.5,
+    )
+    .unwrap()
+}

@@ -9,11 +9,13 @@ mod common;
 use std::collections::HashMap;
 
 use candle_core::{DType, Device, Tensor};
-use common::{assert_close, fixtures, tiny};
+use common::{
+    assert_close, fixtures, modes, modes_control, modes_mask, modes_params, paper_context, tiny,
+};
 use gait_core::{CANONICAL, EdgeMap, Frame, ImageRegenerator, Keypoint, Pose, Resize};
 use gait_diffuse::{
-    ControlnetConfig, ControlnetPipeline, ControlnetRegenerator, DenoiseParams, RegenMode,
-    RegeneratorConfig, SchedulerKind,
+    ControlnetConfig, ControlnetPipeline, ControlnetRegenerator, RegenMode, RegeneratorConfig,
+    SchedulerKind,
 };
 
 const TOL: f64 = 1e-4;
@@ -23,11 +25,6 @@ const TOL: f64 = 1e-4;
 /// `TOL`, against stock diffusers to this (as tiny_models.rs; the ort tests
 /// hold the stock images to 1e-4).
 const TOL_ERF_GELU: f64 = 2e-3;
-
-fn modes() -> HashMap<String, Tensor> {
-    candle_core::safetensors::load(fixtures().join("modes.safetensors"), &Device::Cpu)
-        .expect("modes.safetensors")
-}
 
 fn pipeline() -> ControlnetPipeline {
     ControlnetPipeline::load_with_encoder(
@@ -43,23 +40,6 @@ fn pipeline() -> ControlnetPipeline {
 fn init_image(e: &HashMap<String, Tensor>) -> Tensor {
     let hwc = (&e["modes.frame"] / 255.0).unwrap();
     ((hwc.permute((2, 0, 1)).unwrap().unsqueeze(0).unwrap() * 2.0).unwrap() - 1.0).unwrap()
-}
-
-fn control(e: &HashMap<String, Tensor>) -> Tensor {
-    let edge = (&e["modes.edge"] / 255.0).unwrap();
-    Tensor::stack(&[&edge, &edge, &edge], 0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap()
-}
-
-fn params(kind: SchedulerKind) -> DenoiseParams {
-    DenoiseParams {
-        steps: 3,
-        guidance_scale: 7.5,
-        conditioning_scale: 0.8,
-        scheduler: kind,
-    }
 }
 
 const SCHEDULERS: [(&str, SchedulerKind); 2] = [
@@ -91,23 +71,17 @@ fn vae_encoder_matches_diffusers_latent_dist() {
 fn img2img_matches_diffusers() {
     let e = modes();
     let pipe = pipeline();
-    let ctx = pipe
-        .context(
-            gait_diffuse::PAPER_PROMPT,
-            gait_diffuse::PAPER_NEGATIVE_PROMPT,
-            7.5,
-        )
-        .unwrap();
+    let ctx = paper_context(&pipe);
     for (name, kind) in SCHEDULERS {
         let img = pipe
             .img2img(
                 &ctx,
-                &control(&e),
+                &modes_control(&e),
                 &init_image(&e),
                 &e["modes.enc_eps"],
                 &e["modes.noise"],
                 0.75,
-                &params(kind),
+                &modes_params(kind),
             )
             .unwrap();
         assert_close(
@@ -129,19 +103,8 @@ fn img2img_matches_diffusers() {
 fn inpaint_matches_diffusers() {
     let e = modes();
     let pipe = pipeline();
-    let ctx = pipe
-        .context(
-            gait_diffuse::PAPER_PROMPT,
-            gait_diffuse::PAPER_NEGATIVE_PROMPT,
-            7.5,
-        )
-        .unwrap();
-    let mask = (&e["modes.mask"] / 255.0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap();
+    let ctx = paper_context(&pipe);
+    let mask = modes_mask(&e);
     let cases = [
         (
             "ddim",
@@ -166,13 +129,13 @@ fn inpaint_matches_diffusers() {
         let img = pipe
             .inpaint(
                 &ctx,
-                &control(&e),
+                &modes_control(&e),
                 &init_image(&e),
                 &mask,
                 &e["modes.enc_eps"],
                 &e["modes.noise"],
                 strength,
-                &params(kind),
+                &modes_params(kind),
             )
             .unwrap();
         assert_close(
@@ -368,18 +331,12 @@ fn half_precision_modes_track_the_reference() {
         &Device::Cpu,
     )
     .unwrap();
-    let ctx = pipe
-        .context(
-            gait_diffuse::PAPER_PROMPT,
-            gait_diffuse::PAPER_NEGATIVE_PROMPT,
-            7.5,
-        )
-        .unwrap();
-    let p = params(SchedulerKind::Unipc);
+    let ctx = paper_context(&pipe);
+    let p = modes_params(SchedulerKind::Unipc);
     let img = pipe
         .img2img(
             &ctx,
-            &control(&e),
+            &modes_control(&e),
             &init_image(&e),
             &e["modes.enc_eps"],
             &e["modes.noise"],
@@ -395,16 +352,11 @@ fn half_precision_modes_track_the_reference() {
         &e["modes.tanh.img2img.unipc.image"],
         5e-2,
     );
-    let mask = (&e["modes.mask"] / 255.0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap();
+    let mask = modes_mask(&e);
     let img = pipe
         .inpaint(
             &ctx,
-            &control(&e),
+            &modes_control(&e),
             &init_image(&e),
             &mask,
             &e["modes.enc_eps"],

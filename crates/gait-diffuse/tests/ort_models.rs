@@ -5,12 +5,12 @@
 
 mod common;
 
-use candle_core::{DType, Tensor};
-use common::{assert_close, expected, require_ort, tiny, tiny_onnx};
+use candle_core::DType;
+use common::{assert_close, check_two_step_pipeline, expected, require_ort, tiny, tiny_onnx};
 use gait_core::{EdgeMap, Frame, ImageRegenerator, Resize, StageContext};
 use gait_diffuse::{
-    ControlnetConfig, ControlnetPipeline, ControlnetRegenerator, DenoiseParams, DiffusionModels,
-    OrtModels, RegeneratorConfig, SchedulerKind,
+    ControlnetConfig, ControlnetPipeline, ControlnetRegenerator, DiffusionModels, OrtModels,
+    RegeneratorConfig,
 };
 
 const TOL: f64 = 1e-4;
@@ -60,41 +60,9 @@ fn vae_decode_matches_diffusers() {
 #[test]
 fn two_step_pipeline_image_matches_diffusers() {
     require_ort();
-    let e = expected();
     let pipe =
         ControlnetPipeline::load_ort(&tiny_onnx(), &tiny().join("tokenizer/merges.txt")).unwrap();
-    let ctx = pipe
-        .context(
-            gait_diffuse::PAPER_PROMPT,
-            gait_diffuse::PAPER_NEGATIVE_PROMPT,
-            7.5,
-        )
-        .unwrap();
-    let edge = (e["pipe.edge"].to_dtype(DType::F32).unwrap() / 255.0).unwrap();
-    let control = Tensor::stack(&[&edge, &edge, &edge], 0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap();
-    for (name, kind) in [
-        ("ddim", SchedulerKind::Ddim),
-        ("unipc", SchedulerKind::Unipc),
-    ] {
-        let p = DenoiseParams {
-            steps: 2,
-            guidance_scale: 7.5,
-            conditioning_scale: 0.8,
-            scheduler: kind,
-        };
-        let img = pipe
-            .generate(&ctx, &control, &e["pipe.latents"], &p)
-            .unwrap();
-        assert_close(
-            &format!("ort pipeline {name}"),
-            &img,
-            &e[&format!("pipe.{name}.image")],
-            TOL,
-        );
-    }
+    check_two_step_pipeline("ort pipeline", &pipe, TOL);
 }
 
 /// A models folder holding the ONNX exports in the layout the config expects.

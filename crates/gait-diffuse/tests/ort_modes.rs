@@ -4,39 +4,17 @@
 
 mod common;
 
-use std::collections::HashMap;
-
-use candle_core::{Device, Tensor};
-use common::{assert_close, fixtures, require_ort, tiny, tiny_onnx};
-use gait_diffuse::{ControlnetPipeline, DenoiseParams, SchedulerKind};
+use common::{
+    assert_close, modes, modes_control, modes_mask, modes_params, paper_context, require_ort, tiny,
+    tiny_onnx,
+};
+use gait_diffuse::{ControlnetPipeline, SchedulerKind};
 
 const TOL: f64 = 1e-4;
-
-fn modes() -> HashMap<String, Tensor> {
-    candle_core::safetensors::load(fixtures().join("modes.safetensors"), &Device::Cpu)
-        .expect("modes.safetensors")
-}
 
 fn pipeline() -> ControlnetPipeline {
     require_ort();
     ControlnetPipeline::load_ort(&tiny_onnx(), &tiny().join("tokenizer/merges.txt")).unwrap()
-}
-
-fn params(kind: SchedulerKind) -> DenoiseParams {
-    DenoiseParams {
-        steps: 3,
-        guidance_scale: 7.5,
-        conditioning_scale: 0.8,
-        scheduler: kind,
-    }
-}
-
-fn control(e: &HashMap<String, Tensor>) -> Tensor {
-    let edge = (&e["modes.edge"] / 255.0).unwrap();
-    Tensor::stack(&[&edge, &edge, &edge], 0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap()
 }
 
 #[test]
@@ -51,19 +29,8 @@ fn ort_vae_encoder_matches_diffusers() {
 fn ort_img2img_and_inpaint_match_diffusers() {
     let e = modes();
     let pipe = pipeline();
-    let ctx = pipe
-        .context(
-            gait_diffuse::PAPER_PROMPT,
-            gait_diffuse::PAPER_NEGATIVE_PROMPT,
-            7.5,
-        )
-        .unwrap();
-    let mask = (&e["modes.mask"] / 255.0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap();
+    let ctx = paper_context(&pipe);
+    let mask = modes_mask(&e);
     for (name, kind) in [
         ("ddim", SchedulerKind::Ddim),
         ("unipc", SchedulerKind::Unipc),
@@ -71,12 +38,12 @@ fn ort_img2img_and_inpaint_match_diffusers() {
         let img = pipe
             .img2img(
                 &ctx,
-                &control(&e),
+                &modes_control(&e),
                 &e["modes.init"],
                 &e["modes.enc_eps"],
                 &e["modes.noise"],
                 0.75,
-                &params(kind),
+                &modes_params(kind),
             )
             .unwrap();
         assert_close(
@@ -95,13 +62,13 @@ fn ort_img2img_and_inpaint_match_diffusers() {
             let img = pipe
                 .inpaint(
                     &ctx,
-                    &control(&e),
+                    &modes_control(&e),
                     &e["modes.init"],
                     &mask,
                     &e["modes.enc_eps"],
                     &e["modes.noise"],
                     strength,
-                    &params(kind),
+                    &modes_params(kind),
                 )
                 .unwrap();
             assert_close(

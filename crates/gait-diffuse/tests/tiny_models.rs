@@ -3,15 +3,13 @@
 
 mod common;
 
-use candle_core::{DType, Device, Tensor};
+use candle_core::{DType, Device};
 use candle_nn::VarBuilder;
 use candle_transformers::models::stable_diffusion::vae::AutoEncoderKL;
-use common::{assert_close, expected, tiny};
+use common::{assert_close, check_two_step_pipeline, expected, tiny};
 use gait_diffuse::model_config::{TextConfig, UnetConfig, VaeConfig, read_config};
 use gait_diffuse::weights::build_unet;
-use gait_diffuse::{
-    ClipTextModel, ControlNet, ControlnetPipeline, DenoiseParams, Scheduler, SchedulerKind,
-};
+use gait_diffuse::{ClipTextModel, ControlNet, ControlnetPipeline, Scheduler, SchedulerKind};
 
 const TOL: f64 = 1e-4;
 /// candle-transformers 0.11.1's GEGLU (in every UNet transformer block) uses
@@ -149,7 +147,6 @@ fn schedulers_match_diffusers() {
 
 #[test]
 fn two_step_pipeline_image_matches_diffusers() {
-    let e = expected();
     let pipe = ControlnetPipeline::load(
         &tiny(),
         &tiny().join("controlnet"),
@@ -157,36 +154,5 @@ fn two_step_pipeline_image_matches_diffusers() {
         &Device::Cpu,
     )
     .unwrap();
-    let ctx = pipe
-        .context(
-            gait_diffuse::PAPER_PROMPT,
-            gait_diffuse::PAPER_NEGATIVE_PROMPT,
-            7.5,
-        )
-        .unwrap();
-    let edge = (e["pipe.edge"].to_dtype(DType::F32).unwrap() / 255.0).unwrap();
-    let control = Tensor::stack(&[&edge, &edge, &edge], 0)
-        .unwrap()
-        .unsqueeze(0)
-        .unwrap();
-    for (name, kind) in [
-        ("ddim", SchedulerKind::Ddim),
-        ("unipc", SchedulerKind::Unipc),
-    ] {
-        let p = DenoiseParams {
-            steps: 2,
-            guidance_scale: 7.5,
-            conditioning_scale: 0.8,
-            scheduler: kind,
-        };
-        let img = pipe
-            .generate(&ctx, &control, &e["pipe.latents"], &p)
-            .unwrap();
-        assert_close(
-            &format!("pipeline {name}"),
-            &img,
-            &e[&format!("pipe.{name}.image")],
-            TOL_PIPELINE,
-        );
-    }
+    check_two_step_pipeline("pipeline", &pipe, TOL_PIPELINE);
 }
