@@ -74,10 +74,10 @@ struct OnnxNet {
 
 impl OnnxNet {
     fn load(path: &Path) -> Result<Self, DiffuseError> {
-        // A missing runtime is its own error, not a fault of this model file.
-        gait_ort::environment().map_err(DiffuseError::Ort)?;
-        let session = gait_ort::session(path, gait_ort::Device::Cpu)
-            .map_err(|e| DiffuseError::bad_model(path, e))?;
+        let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(|e| match e {
+            gait_ort::SessionError::Runtime(m) => DiffuseError::Ort(m),
+            gait_ort::SessionError::Model(m) => DiffuseError::bad_model(path, m),
+        })?;
         let inputs = session
             .inputs()
             .iter()

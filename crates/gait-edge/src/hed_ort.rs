@@ -16,7 +16,10 @@ pub(crate) struct OrtHed {
 
 impl OrtHed {
     pub(crate) fn load(path: &Path) -> Result<Self, HedError> {
-        let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(HedError::Format)?;
+        let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(|e| match e {
+            gait_ort::SessionError::Runtime(m) => HedError::Inference(m),
+            gait_ort::SessionError::Model(m) => HedError::Format(m),
+        })?;
         let names: Vec<&str> = session.outputs().iter().map(|o| o.name()).collect();
         for i in 1..=5 {
             let want = format!("side{i}");

@@ -25,35 +25,56 @@ pub enum Device {
 /// Opens the ONNX file `path` in the shared environment, on `device`, with
 /// one intra-op thread per core and no busy-waiting workers.
 ///
-/// Errors are one-line messages; a CUDA request that the loaded library
-/// cannot serve fails instead of silently running on the CPU.
-pub fn session(path: &Path, device: Device) -> Result<Session, String> {
-    let env = environment()?;
+/// A CUDA request that the loaded library cannot serve fails instead of
+/// silently running on the CPU.
+pub fn session(path: &Path, device: Device) -> Result<Session, SessionError> {
+    let runtime = |e: ort::Error<_>| SessionError::Runtime(e.to_string());
+    let env = environment().map_err(SessionError::Runtime)?;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut builder = Session::builder(&env)
-        .map_err(|e| e.to_string())?
+        .map_err(|e| SessionError::Runtime(e.to_string()))?
         .with_intra_threads(threads)
-        .map_err(|e| e.to_string())?
+        .map_err(runtime)?
         // Spinning workers burn the cores that other stages (and other
         // processes on a small machine) need between ops; measured on the
         // BlazePose detector with 2 threads: 23 ms spinning, 12 ms not.
         .with_intra_op_spinning(false)
-        .map_err(|e| e.to_string())?;
+        .map_err(runtime)?;
     if let Device::Cuda(ordinal) = device {
         let cuda = ort::ep::CUDA::default()
             .with_device_id(ordinal as i32)
             .build()
             .error_on_failure();
         builder = builder.with_execution_providers([cuda]).map_err(|e| {
-            format!(
+            SessionError::Runtime(format!(
                 "cannot use CUDA device {ordinal} in ONNX Runtime ({e}); the library at $ORT_DYLIB_PATH must come from the onnxruntime-gpu wheel"
-            )
+            ))
         })?;
     }
     builder
         .commit_from_file(path)
-        .map_err(|e| format!("{}: {e}", path.display()))
+        .map_err(|e| SessionError::Model(format!("{}: {e}", path.display())))
 }
+
+/// Why [`session`] failed, as one-line messages.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SessionError {
+    /// ONNX Runtime itself: library not found or not loadable, or the
+    /// requested execution provider missing. Not the model file's fault.
+    Runtime(String),
+    /// The model file: missing, unreadable, or not a valid ONNX graph.
+    Model(String),
+}
+
+impl std::fmt::Display for SessionError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SessionError::Runtime(m) | SessionError::Model(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for SessionError {}
 
 /// The process's ONNX Runtime environment, created on first use.
 ///
@@ -84,19 +105,22 @@ mod tests {
         let err = session(Path::new("/nonexistent.onnx"), Device::Cuda(0))
             .err()
             .unwrap();
+        assert!(matches!(err, SessionError::Runtime(_)), "{err:?}");
+        let text = err.to_string();
         if std::env::var_os("ORT_DYLIB_PATH").is_none() {
-            assert!(err.contains("ORT_DYLIB_PATH"), "{err}");
+            assert!(text.contains("ORT_DYLIB_PATH"), "{text}");
             return;
         }
-        eprintln!("{err}");
+        eprintln!("{text}");
         assert!(
-            err.contains("CUDA") && err.contains("onnxruntime-gpu"),
-            "{err}"
+            text.contains("CUDA") && text.contains("onnxruntime-gpu"),
+            "{text}"
         );
         let err = session(Path::new("/nonexistent.onnx"), Device::Cpu)
             .err()
             .unwrap();
-        assert!(err.contains("/nonexistent.onnx"), "{err}");
+        assert!(matches!(err, SessionError::Model(_)), "{err:?}");
+        assert!(err.to_string().contains("/nonexistent.onnx"), "{err}");
     }
 
     #[test]

@@ -41,7 +41,10 @@ pub(crate) fn load(tflite: &Path, graph: &Graph) -> Result<Box<dyn Net>, StageEr
             hint: "run `gait models fetch blazepose` (it also writes the ONNX exports)".into(),
         });
     }
-    let session = gait_ort::session(&onnx, gait_ort::Device::Cpu).map_err(err)?;
+    let session = gait_ort::session(&onnx, gait_ort::Device::Cpu).map_err(|e| match e {
+        gait_ort::SessionError::Runtime(m) => err(m),
+        gait_ort::SessionError::Model(m) => StageError::bad_model(&onnx, m),
+    })?;
     let input = graph
         .inputs
         .first()

@@ -40,8 +40,10 @@ impl OrtNet {
                 hint: "export one with tools/openpose/export_onnx.py".into(),
             });
         }
-        let session = gait_ort::session(path, gait_ort::Device::Cpu)
-            .map_err(|e| StageError::bad_model(path, e))?;
+        let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(|e| match e {
+            gait_ort::SessionError::Runtime(m) => err(m),
+            gait_ort::SessionError::Model(m) => StageError::bad_model(path, m),
+        })?;
         let names: Vec<&str> = session.outputs().iter().map(|o| o.name()).collect();
         let outputs = if names.contains(&"paf") && names.contains(&"heatmap") {
             Outputs::Named
