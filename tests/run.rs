@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{gait, models_dir, read_json, run_ok, sample_video};
+use common::{read_json, run_ok};
 use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
@@ -97,21 +97,10 @@ fn default_pipeline_on_the_sample_video() {
 
     // run.json repeats the run: same keypoints, all from the cache.
     let again = dir.path().join("again");
-    run_ok(
-        gait()
-            .args(["run", "--no-progress", "--models-dir"])
-            .arg(models_dir())
-            .arg("--config")
-            .arg(out.join("run.json"))
-            .arg("--input")
-            .arg(sample_video())
-            .arg("--out")
-            .arg(&again)
-            .args([
-                "--set",
-                &format!("run.cache_dir={}", out.join("cache").display()),
-            ]),
-    );
+    run_ok(common::rerun(&out, &again).args([
+        "--set",
+        &format!("run.cache_dir={}", out.join("cache").display()),
+    ]));
     assert_eq!(read_json(&again.join("run.json"))["frames_from_cache"], 8);
     assert_eq!(rows(&again.join("keypoints.csv")), data);
 }

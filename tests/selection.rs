@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{fails_with, gait, models_dir, read_json, run_ok, sample_run, sample_video};
+use common::{fails_with, read_json, run_ok, sample_run};
 use gait_core::keypoint::LOWER_LIMB as LOWER;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -239,18 +239,7 @@ fn poor_frames_are_regenerated_and_good_frames_keep_their_pose() {
     // run.json repeats the run, all from the cache.
     let again = dir.path().join("again");
     let cache_dir = format!("run.cache_dir={}", out.join("cache").display());
-    run_ok(
-        gait()
-            .args(["run", "--no-progress", "--models-dir"])
-            .arg(models_dir())
-            .arg("--config")
-            .arg(out.join("run.json"))
-            .arg("--input")
-            .arg(sample_video())
-            .arg("--out")
-            .arg(&again)
-            .args(["--set", &cache_dir]),
-    );
+    run_ok(common::rerun(&out, &again).args(["--set", &cache_dir]));
     let repeated = read_json(&again.join("run.json"));
     assert_eq!(repeated["frames_from_cache"], 10);
     assert_eq!(repeated["stages"]["pose"]["computed"], 0);
@@ -364,17 +353,7 @@ fn stride_interpolates_between_processed_frames() {
 
     // Repeating from run.json gives the same keypoints.
     let again = dir.path().join("again");
-    run_ok(
-        gait()
-            .args(["run", "--no-progress", "--models-dir"])
-            .arg(models_dir())
-            .arg("--config")
-            .arg(out.join("run.json"))
-            .arg("--input")
-            .arg(sample_video())
-            .arg("--out")
-            .arg(&again),
-    );
+    run_ok(&mut common::rerun(&out, &again));
     assert_eq!(Csv::read(&again.join("keypoints.csv")).rows, strided.rows);
     assert_eq!(read_json(&again.join("run.json"))["selection"], *sel);
 }

@@ -42,6 +42,21 @@ pub fn sample_run(out: &Path, first: usize, last: usize) -> Command {
     cmd
 }
 
+/// `gait run --config <run>/run.json` on the sample video, writing to `out`:
+/// a run repeated from its manifest.
+pub fn rerun(run: &Path, out: &Path) -> Command {
+    let mut cmd = gait();
+    cmd.args(["run", "--no-progress", "--models-dir"])
+        .arg(models_dir())
+        .arg("--config")
+        .arg(run.join("run.json"))
+        .arg("--input")
+        .arg(sample_video())
+        .arg("--out")
+        .arg(out);
+    cmd
+}
+
 pub fn run_ok(cmd: &mut Command) -> Output {
     let out = cmd.output().expect("gait runs");
     assert!(
