@@ -34,7 +34,8 @@ NAMES = ["left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "righ
 MM_PER_PX = 2.0
 
 
-def main(src: str, out_dir: str) -> None:
+def main(src: str, out_dir: str, scorer: str = "fukuchi2018_mocap") -> None:
+    """Projects one gaitkit example trial (this file's format) into `out_dir`."""
     d = json.loads(Path(src).read_text())
     fps = float(d["fps"])
     frames = d["angle_frames"]
@@ -43,9 +44,14 @@ def main(src: str, out_dir: str) -> None:
     xs = [f["landmark_positions"][n][0] for f in frames for n in NAMES]
     ys = [f["landmark_positions"][n][1] for f in frames for n in NAMES]
     x0, y1 = min(xs), max(ys)
+    # The walk must go along +x for the camera-on-the-right convention above.
+    first = frames[0]["landmark_positions"]
+    last = frames[-1]["landmark_positions"]
+    assert last["left_hip"][0] > first["left_hip"][0], "expected a walk along +x"
+    assert first["right_hip"][2] > first["left_hip"][2], "expected the right side at +z"
 
     rows = [
-        ",".join(["scorer"] + ["fukuchi2018_mocap"] * (3 * len(NAMES))),
+        ",".join(["scorer"] + [scorer] * (3 * len(NAMES))),
         ",".join(["bodyparts"] + [n for n in NAMES for _ in range(3)]),
         ",".join(["coords"] + ["x", "y", "likelihood"] * len(NAMES)),
     ]
@@ -73,7 +79,7 @@ def main(src: str, out_dir: str) -> None:
     for f in frames:
         lines.append(str(f["frame_index"]) + "," + ",".join(f"{f[c]:.4f}" for c in cols))
     (out / "reference.csv").write_text("\n".join(lines) + "\n")
-    print(f"{len(frames)} frames at {fps} Hz -> {out}")
+    print(f"{len(frames)} frames at {fps} Hz, {len(ev)} events -> {out}")
 
 
 if __name__ == "__main__":

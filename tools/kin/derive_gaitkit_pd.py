@@ -26,63 +26,15 @@ Projection (as tools/kin/derive_fukuchi.py): lab x = walking direction, y = up, 
 Writes keypoints.csv (DeepLabCut layout, 10 lower-limb keypoints), events.csv
 (side,event,frame,time_s: the file's annotated events) and reference.csv (the file's angles).
 """
-import json
 import sys
 from pathlib import Path
 
-NAMES = ["left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle",
-         "left_heel", "right_heel", "left_toe", "right_toe"]
-MM_PER_PX = 2.0
-
-
-def main(src: str, out_dir: str) -> None:
-    d = json.loads(Path(src).read_text())
-    fps = float(d["fps"])
-    frames = d["angle_frames"]
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    xs = [f["landmark_positions"][n][0] for f in frames for n in NAMES]
-    ys = [f["landmark_positions"][n][1] for f in frames for n in NAMES]
-    x0, y1 = min(xs), max(ys)
-    # The walk must go along +x for the camera-on-the-right convention above.
-    first = frames[0]["landmark_positions"]
-    last = frames[-1]["landmark_positions"]
-    assert last["left_hip"][0] > first["left_hip"][0], "expected a walk along +x"
-    assert first["right_hip"][2] > first["left_hip"][2], "expected the right side at +z"
-
-    rows = [
-        ",".join(["scorer"] + ["gaitkit_pd_mocap"] * (3 * len(NAMES))),
-        ",".join(["bodyparts"] + [n for n in NAMES for _ in range(3)]),
-        ",".join(["coords"] + ["x", "y", "likelihood"] * len(NAMES)),
-    ]
-    for f in frames:
-        cells = [str(f["frame_index"])]
-        for n in NAMES:
-            X, Y, _Z = f["landmark_positions"][n]
-            cells += [f"{(X - x0) / MM_PER_PX + 50:.3f}", f"{(y1 - Y) / MM_PER_PX + 50:.3f}", "1"]
-        rows.append(",".join(cells))
-    (out / "keypoints.csv").write_text("\n".join(rows) + "\n")
-
-    gt = d["ground_truth"]
-    ev = []
-    for kind, key in (("heel_strike", "hs_frames"), ("toe_off", "to_frames")):
-        for side in ("left", "right"):
-            for fr in gt[key][side]:
-                ev.append((fr, side, kind))
-    ev.sort()
-    lines = ["side,event,frame,time_s"] + [f"{s},{k},{fr},{fr / fps:.6f}" for fr, s, k in ev]
-    (out / "events.csv").write_text("\n".join(lines) + "\n")
-
-    cols = ["left_hip_angle", "right_hip_angle", "left_knee_angle", "right_knee_angle",
-            "left_ankle_angle", "right_ankle_angle"]
-    lines = ["frame," + ",".join(c.replace("_angle", "") for c in cols)]
-    for f in frames:
-        lines.append(str(f["frame_index"]) + "," + ",".join(f"{f[c]:.4f}" for c in cols))
-    (out / "reference.csv").write_text("\n".join(lines) + "\n")
-    print(f"{len(frames)} frames at {fps} Hz, {len(ev)} events -> {out}")
+# Same file format as the Fukuchi trial: one derivation for both.
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from derive_fukuchi import main as derive  # noqa: E402
 
 
 if __name__ == "__main__":
     if len(sys.argv) != 3:
         sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2])
+    derive(sys.argv[1], sys.argv[2], scorer="gaitkit_pd_mocap")
