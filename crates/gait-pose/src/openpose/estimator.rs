@@ -1,11 +1,11 @@
 //! The OpenPose estimator: network + decoding per frame, then the choice of
 //! the person to follow (see [`crate::person`]).
 
-use gait_core::{Backend, Frame, Pose, PoseEstimator, StageContext, StageError};
+use gait_core::{Frame, Pose, PoseEstimator, StageContext, StageError};
 
 use super::config::OpenposeConfig;
 use super::decode::{self, Person};
-use super::{OpenposeModel, OpenposeNet, names, net};
+use super::{OpenposeNet, names, net};
 use crate::person::{self, Candidate};
 
 /// The OpenPose estimator (implements [`PoseEstimator`]).
@@ -20,20 +20,6 @@ impl Openpose {
     /// Loads the network named by the config.
     pub fn new(config: &OpenposeConfig, ctx: &StageContext) -> Result<Self, StageError> {
         let path = config.weights(ctx);
-        if !path.is_file() {
-            let hint = match config.backend {
-                Backend::Candle => "run `gait models fetch openpose` or set model_path".to_string(),
-                Backend::Ort => format!(
-                    "export it with tools/openpose/export_onnx.py (from the checkpoint of `gait models fetch openpose`{}) or set model_path",
-                    if config.model == OpenposeModel::Body25 {
-                        "; BODY_25 needs OpenPose's own model converted to ONNX"
-                    } else {
-                        ""
-                    }
-                ),
-            };
-            return Err(StageError::MissingModel { path, hint });
-        }
         Ok(Self {
             net: net::load(&path, config.model, config.backend)?,
             config: config.clone(),

@@ -50,7 +50,9 @@ pub fn load(
             if !path.is_file() {
                 return Err(StageError::MissingModel {
                     path: path.to_path_buf(),
-                    hint: "run `gait models fetch openpose` (body_pose_model.pth)".into(),
+                    hint:
+                        "run `gait models fetch openpose` (body_pose_model.pth) or set model_path"
+                            .into(),
                 });
             }
             let tensors =

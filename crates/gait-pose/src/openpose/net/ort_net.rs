@@ -37,7 +37,11 @@ impl OrtNet {
         if !path.is_file() {
             return Err(StageError::MissingModel {
                 path: path.to_path_buf(),
-                hint: "export one with tools/openpose/export_onnx.py".into(),
+                hint: match model {
+                    OpenposeModel::Coco18 => "export it with tools/openpose/export_onnx.py from the checkpoint of `gait models fetch openpose`, or set model_path",
+                    OpenposeModel::Body25 => "convert OpenPose's own BODY_25 model to ONNX and set model_path",
+                }
+                .into(),
             });
         }
         let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(|e| match e {
