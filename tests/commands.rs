@@ -347,29 +347,19 @@ fn inpainting_runs_on_a_pose_of_the_original_frames() {
     // The tiny random SD 1.5 + ControlNet of gait-diffuse's fixtures: the
     // images are noise, but the wiring is real: a pose pass on the original
     // frames, leg masks from it, and a cache that knows the mask depends on it.
-    let tiny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../gait-diffuse/tests/fixtures/tiny");
     let dir = tempfile::tempdir().unwrap();
     let cache = format!("run.cache_dir={}", dir.path().join("cache").display());
-    let sd = format!("regenerator.sd_path={:?}", tiny.display().to_string());
-    let cn = format!(
-        "regenerator.controlnet_path={:?}",
-        tiny.join("controlnet").display().to_string()
-    );
     let run = |out: &Path, extra: &[&str]| {
         let mut cmd = common::sample_run(out, 150, 151);
-        for s in [
-            "edge.kind=\"canny\"",
-            "regenerator.kind=\"controlnet\"",
-            "regenerator.mode=\"inpaint\"",
-            "regenerator.resolution=64",
-            "regenerator.steps=2",
-            "regenerator.mask.paste_back=true",
-            &sd,
-            &cn,
-            &cache,
-        ]
-        .iter()
-        .chain(extra)
+        for s in common::tiny_controlnet_sets()
+            .iter()
+            .map(String::as_str)
+            .chain([
+                "regenerator.mode=\"inpaint\"",
+                "regenerator.mask.paste_back=true",
+                &cache,
+            ])
+            .chain(extra.iter().copied())
         {
             cmd.args(["--set", s]);
         }

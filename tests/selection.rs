@@ -392,3 +392,69 @@ fn invalid_selection_settings_are_one_line_errors() {
         &["[selection]", "left_paw", "left_knee"],
     );
 }
+
+#[test]
+fn only_poor_frames_go_through_the_controlnet() {
+    // The tiny random SD 1.5 + ControlNet (noise images, real wiring): the
+    // edge detector and the diffusion model run on the poor frames alone, and
+    // their poses come from the redrawn images.
+    let dir = tempfile::tempdir().unwrap();
+    let (first, last) = (150, 155);
+    let plain = dir.path().join("plain");
+    run_ok(&mut run_args(&plain, first, last, &[]));
+    let original = Csv::read(&plain.join("keypoints.csv"));
+    let mut weakest: Vec<f64> = original
+        .frames()
+        .iter()
+        .map(|&f| {
+            LOWER
+                .iter()
+                .map(|n| original.point(f, n)[2])
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    weakest.sort_by(f64::total_cmp);
+    let threshold = (weakest[2] + weakest[3]) / 2.0;
+
+    let cache = dir.path().join("cache");
+    let mut sets = common::tiny_controlnet_sets();
+    sets.extend([
+        "selection.mode=poor".to_string(),
+        format!("selection.min_likelihood={threshold}"),
+        format!("run.cache_dir={}", cache.display()),
+    ]);
+    let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+    let out = dir.path().join("poor");
+    run_ok(&mut run_args(&out, first, last, &sets));
+
+    let poor: BTreeSet<usize> = judge(&Csv::read(&out.join("keypoints_original.csv")), threshold)
+        .into_iter()
+        .filter_map(|(f, r)| r.map(|_| f))
+        .collect();
+    assert!(!poor.is_empty() && poor.len() < 6, "{poor:?}");
+    let manifest = read_json(&out.join("run.json"));
+    assert_eq!(frames_of(&manifest["selection"]["regenerated"]), poor);
+    for stage in ["edge", "regenerator", "pose"] {
+        assert_eq!(
+            manifest["stages"][stage]["computed"],
+            poor.len(),
+            "{stage} ran on other frames than the poor ones"
+        );
+    }
+    // The redrawn images are the poor frames, by frame number.
+    let redrawn: BTreeSet<usize> = cached_files(&cache, "regenerator-")
+        .iter()
+        .map(|p| p.file_stem().unwrap().to_string_lossy().parse().unwrap())
+        .collect();
+    assert_eq!(redrawn, poor);
+
+    let result = Csv::read(&out.join("keypoints.csv"));
+    for f in first..=last {
+        if poor.contains(&f) {
+            // Poses of noise images, not of the original frames.
+            assert_ne!(result.row(f), original.row(f), "frame {f}");
+        } else {
+            assert_eq!(result.row(f), original.row(f), "frame {f}");
+        }
+    }
+}

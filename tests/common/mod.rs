@@ -57,6 +57,24 @@ pub fn rerun(run: &Path, out: &Path) -> Command {
     cmd
 }
 
+/// `--set` values that swap in the ControlNet regenerator with the tiny
+/// random SD 1.5 + ControlNet of gait-diffuse's fixtures (64x64, 2 steps): the
+/// images are noise, but every piece of the wiring is the real one.
+pub fn tiny_controlnet_sets() -> Vec<String> {
+    let tiny = Path::new(env!("CARGO_MANIFEST_DIR")).join("../gait-diffuse/tests/fixtures/tiny");
+    vec![
+        "edge.kind=\"canny\"".into(),
+        "regenerator.kind=\"controlnet\"".into(),
+        "regenerator.resolution=64".into(),
+        "regenerator.steps=2".into(),
+        format!("regenerator.sd_path={:?}", tiny.display().to_string()),
+        format!(
+            "regenerator.controlnet_path={:?}",
+            tiny.join("controlnet").display().to_string()
+        ),
+    ]
+}
+
 pub fn run_ok(cmd: &mut Command) -> Output {
     let out = cmd.output().expect("gait runs");
     assert!(
