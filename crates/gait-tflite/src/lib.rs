@@ -5,8 +5,8 @@
 
 mod candle;
 mod densify;
-mod depthwise;
 mod flatbuf;
+mod kernels;
 mod model;
 mod onnx;
 mod same;
