@@ -52,6 +52,9 @@ struct Node {
     inputs: Vec<usize>,
     output: usize,
     act: Activation,
+    /// Computed values no later node reads: dropped right after this node, so
+    /// the allocator reuses their memory instead of mapping fresh pages.
+    last_use: Vec<usize>,
 }
 
 /// A TFLite graph compiled to candle operations.
@@ -283,6 +286,7 @@ impl CandleGraph {
                 inputs: ins,
                 output: out,
                 act,
+                last_use: Vec::new(),
             });
         }
         let mut consts = vec![None; n];
@@ -293,6 +297,18 @@ impl CandleGraph {
             }
         }
         let input = *graph.inputs.first().ok_or("graph has no input")?;
+        let mut seen = vec![false; n];
+        for &o in &graph.outputs {
+            seen[o] = true;
+        }
+        for node in nodes.iter_mut().rev() {
+            for &i in &node.inputs {
+                if consts[i].is_none() && !seen[i] {
+                    seen[i] = true;
+                    node.last_use.push(i);
+                }
+            }
+        }
         Ok(Self {
             nodes,
             consts,
@@ -326,6 +342,9 @@ impl CandleGraph {
                 .map_err(ce)?;
             }
             vals[node.output] = Some(y);
+            for &i in &node.last_use {
+                vals[i] = None;
+            }
         }
         self.outputs
             .iter()

@@ -31,13 +31,14 @@ pub(crate) fn binary(
     if !fits(ad, bd) || b.is_empty() {
         bail!("{op:?}: cannot broadcast {bd:?} to {ad:?}")
     }
-    let mut out = a.to_vec();
-    for chunk in out.chunks_mut(b.len()) {
+    let mut out = Vec::with_capacity(a.len());
+    for chunk in a.chunks(b.len()) {
+        let start = out.len();
         match op {
-            Binary::Add => chunk.iter_mut().zip(b).for_each(|(x, y)| *x += y),
-            Binary::Mul => chunk.iter_mut().zip(b).for_each(|(x, y)| *x *= y),
+            Binary::Add => out.extend(chunk.iter().zip(b).map(|(x, y)| x + y)),
+            Binary::Mul => out.extend(chunk.iter().zip(b).map(|(x, y)| x * y)),
         }
-        act::apply(act, chunk);
+        act::apply(act, &mut out[start..]);
     }
     Ok((out, Shape::from(ad)))
 }
