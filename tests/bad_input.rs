@@ -233,3 +233,28 @@ fn every_subcommand_has_help() {
         );
     }
 }
+
+/// `[run] device = "cuda"` in a build without the `cuda` feature: one line
+/// saying how to get a GPU build, before any model is loaded.
+#[cfg(not(feature = "cuda"))]
+#[test]
+fn cuda_device_without_a_cuda_build() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let err = fails_with(
+        gait()
+            .args([
+                "run",
+                "--no-progress",
+                "--set",
+                "run.device=cuda",
+                "--input",
+            ])
+            .arg(common::sample_video())
+            .arg("--out")
+            .arg(&out),
+        &["this build has no CUDA support: rebuild with `--features cuda` (README, GPU section)"],
+    );
+    assert!(!err.contains("model"), "{err}");
+    assert_no_results(&out);
+}

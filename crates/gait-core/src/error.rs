@@ -15,6 +15,9 @@ pub enum StageError {
     /// The inference backend failed.
     #[error("{backend} backend: {reason}")]
     Backend { backend: String, reason: String },
+    /// A GPU was asked for (`[run] device`) in a build without CUDA.
+    #[error(transparent)]
+    NoCuda(#[from] crate::NoCudaSupport),
     #[error("{context}: {source}")]
     Io {
         context: String,

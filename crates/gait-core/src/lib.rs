@@ -7,6 +7,7 @@
 
 mod backend;
 mod context;
+mod device;
 pub mod dlc;
 mod edge;
 mod error;
@@ -19,6 +20,7 @@ mod stage;
 
 pub use backend::Backend;
 pub use context::StageContext;
+pub use device::{Device, NoCudaSupport};
 pub use edge::EdgeMap;
 pub use error::StageError;
 pub use frame::Frame;

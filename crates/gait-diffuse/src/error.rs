@@ -16,6 +16,9 @@ pub enum DiffuseError {
     Config(String),
     #[error("candle: {0}")]
     Candle(#[from] candle_core::Error),
+    /// `[run] device` asks for a GPU and this build has no CUDA.
+    #[error(transparent)]
+    NoCuda(#[from] gait_core::NoCudaSupport),
     /// ONNX Runtime failed (or is not available: `ORT_DYLIB_PATH` unset).
     #[error("onnx runtime: {0}")]
     Ort(String),
@@ -48,6 +51,7 @@ impl From<DiffuseError> for StageError {
             DiffuseError::Config(m) => StageError::BadInput(m),
             DiffuseError::Candle(e) => StageError::backend("candle", e),
             DiffuseError::Ort(m) => StageError::backend("ort", m),
+            DiffuseError::NoCuda(e) => StageError::NoCuda(e),
         }
     }
 }

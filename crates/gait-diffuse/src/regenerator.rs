@@ -30,10 +30,11 @@ impl ControlnetRegenerator {
         config.validate().map_err(DiffuseError::Config)?;
         let pipeline = match config.backend {
             Backend::Candle => {
-                if config.dtype == crate::Dtype::Bf16 {
-                    // candle 0.11.1 has no bf16 matmul on CPU; GPU builds come with issue 10.
+                let device = candle_device(ctx.device)?;
+                if config.dtype == crate::Dtype::Bf16 && device.is_cpu() {
+                    // candle 0.11.1 has no bf16 matmul on CPU.
                     return Err(DiffuseError::Config(
-                        "regenerator.dtype = \"bf16\" needs a GPU build; on CPU use \"f32\" or \"f16\""
+                        "regenerator.dtype = \"bf16\" needs [run] device = \"cuda\"; on CPU use \"f32\" or \"f16\""
                             .into(),
                     ));
                 }
@@ -41,17 +42,19 @@ impl ControlnetRegenerator {
                 let cn = ctx.model_path(&config.controlnet_path);
                 weights::check_files(&sd, &cn)?;
                 if config.mode.uses_frame() {
-                    ControlnetPipeline::load_with_encoder(
-                        &sd,
-                        &cn,
-                        config.dtype.candle(),
-                        &Device::Cpu,
-                    )?
+                    ControlnetPipeline::load_with_encoder(&sd, &cn, config.dtype.candle(), &device)?
                 } else {
-                    ControlnetPipeline::load(&sd, &cn, config.dtype.candle(), &Device::Cpu)?
+                    ControlnetPipeline::load(&sd, &cn, config.dtype.candle(), &device)?
                 }
             }
             Backend::Ort => {
+                if !ctx.device.is_cpu() {
+                    // The ONNX sessions of ort_models.rs are opened on the CPU.
+                    return Err(DiffuseError::Config(format!(
+                        "regenerator.backend = \"ort\" runs on the CPU only; with [run] device = \"{}\" use backend = \"candle\"",
+                        ctx.device
+                    )));
+                }
                 let encoder = ctx
                     .model_path(&config.onnx_path)
                     .join(ort_models::ONNX_VAE_ENCODER);
@@ -296,6 +299,14 @@ impl ImageRegenerator for ControlnetRegenerator {
     fn take_warnings(&mut self) -> Vec<String> {
         std::mem::take(&mut self.warnings)
     }
+}
+
+/// The candle device of `[run] device`, keeping the typed no-CUDA error.
+fn candle_device(device: gait_core::Device) -> Result<Device, DiffuseError> {
+    device.candle().map_err(|e| match e {
+        StageError::NoCuda(e) => DiffuseError::NoCuda(e),
+        other => DiffuseError::Config(other.to_string()),
+    })
 }
 
 /// Puts `original`'s pixels back wherever `mask` does not regenerate.

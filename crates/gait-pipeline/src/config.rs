@@ -7,6 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
+use gait_core::Device;
 use gait_diffuse::RegeneratorConfig;
 use gait_edge::EdgeConfig;
 use gait_kin::{KinematicsConfig, PostprocessConfig};
@@ -44,6 +45,9 @@ pub struct RunConfig {
     /// Where the cache lives; absent = `<out>/cache`. Point several runs at
     /// one folder to share stage results between them (ablations).
     pub cache_dir: Option<PathBuf>,
+    /// Where the model stages run: "cpu", "cuda" (GPU 0) or "cuda:N"; a GPU
+    /// needs a build with `--features cuda` (README, GPU section).
+    pub device: Device,
 }
 
 impl Default for RunConfig {
@@ -52,6 +56,7 @@ impl Default for RunConfig {
             batch_size: 4,
             cache: true,
             cache_dir: None,
+            device: Device::Cpu,
         }
     }
 }
@@ -354,8 +359,24 @@ mod tests {
     }
 
     #[test]
+    fn device_defaults_to_cpu_and_names_the_choices() {
+        assert_eq!(load_str("", &[]).unwrap().run.device, Device::Cpu);
+        let c = load_str("[run]\ndevice = \"cuda:1\"\n", &[]).unwrap();
+        assert_eq!(c.run.device, Device::Cuda(1));
+        let c = load_str("", &["run.device=cuda"]).unwrap();
+        assert_eq!(c.run.device, Device::Cuda(0));
+        let e = load_str("[run]\ndevice = \"gpu\"\n", &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("[run]") && e.contains("gpu") && e.contains("cuda:N"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn resolved_config_round_trips() {
-        let c = load_str("[run]\nbatch_size = 3\n", &[]).unwrap();
+        let c = load_str("[run]\nbatch_size = 3\ndevice = \"cuda:2\"\n", &[]).unwrap();
         let text = c.to_toml();
         let back =
             PipelineConfig::from_table("again", parse_toml("again", &text).unwrap()).unwrap();

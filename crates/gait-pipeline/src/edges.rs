@@ -19,7 +19,8 @@ pub fn export_edges(
     progress: bool,
 ) -> Result<usize, PipelineError> {
     let info = InputInfo::open(input)?;
-    let ctx = StageContext::new(models_dir);
+    crate::runner::cuda_check(config.run.device)?;
+    let ctx = StageContext::new(models_dir).on(config.run.device);
     let mut detector = config.edge.build(&ctx)?.ok_or_else(|| {
         PipelineError::config("[edge]", "kind is \"none\": there are no edge maps to write; set edge.kind (e.g. --set edge.kind=canny)")
     })?;

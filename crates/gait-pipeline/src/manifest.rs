@@ -59,6 +59,8 @@ pub struct ModelRecord {
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct StageRecord {
     pub kind: String,
+    /// Where the stage ran: `[run] device` for stages with a model, else "cpu".
+    pub device: String,
     pub cache_key: String,
     pub computed: usize,
     pub cached: usize,

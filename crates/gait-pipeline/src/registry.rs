@@ -1,7 +1,7 @@
 //! Builds the configured stages. Each stage crate owns its config enum
 //! (`kind = ...`); this is the one place that knows all stage families.
 
-use gait_core::{EdgeDetector, ImageRegenerator, PoseEstimator, StageContext};
+use gait_core::{Device, EdgeDetector, ImageRegenerator, PoseEstimator, StageContext};
 
 use crate::{PipelineConfig, PipelineError};
 
@@ -45,4 +45,20 @@ pub fn stage_kinds(config: &PipelineConfig) -> [(&'static str, String); 3] {
             kind(serde_json::to_value(&config.pose).unwrap_or_default()),
         ),
     ]
+}
+
+/// Where each stage (edge, regenerator, pose) runs with `[run] device`.
+/// Only the ControlNet regenerator on candle takes the GPU so far; the other
+/// stages (and every stage without a model) run on the CPU.
+pub fn stage_devices(config: &PipelineConfig) -> [Device; 3] {
+    let on_gpu = matches!(
+        &config.regenerator,
+        gait_diffuse::RegeneratorConfig::Controlnet(c) if c.backend == gait_core::Backend::Candle
+    );
+    let regenerator = if on_gpu {
+        config.run.device
+    } else {
+        Device::Cpu
+    };
+    [Device::Cpu, regenerator, Device::Cpu]
 }

@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use gait_core::{Pose, PoseSequence, StageContext};
+use gait_core::{Device, Pose, PoseSequence, StageContext};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::cache::{StageCache, chain_key};
@@ -68,7 +68,8 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         .map_or(0, |d| d.as_secs());
     let info = InputInfo::open(&opts.input)?;
     let fps = config.input.fps.unwrap_or(info.fps);
-    let ctx = StageContext::new(&opts.models_dir);
+    cuda_check(config.run.device)?;
+    let ctx = StageContext::new(&opts.models_dir).on(config.run.device);
     let mut stages = registry::build(config, &ctx)?;
     let names = stages.pose.keypoint_names();
     let sel = &config.selection;
@@ -90,11 +91,18 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let edge_models = model_records(config.edge.model_files(&ctx));
     let regen_models = model_records(config.regenerator.model_files(&ctx));
     let pose_models = model_records(config.pose.model_files(&ctx));
-    let edge_key = chain_key(&input_key, "edge", &(&config.edge, &edge_models));
+    // A model gives (slightly) different numbers on a GPU, so the keys of
+    // stages on one name the device; CPU keys stay as they were.
+    let devices = registry::stage_devices(config);
+    let edge_stage = on_device("edge", devices[0]);
+    let regen_stage = on_device("regenerator", devices[1]);
+    let pose_stage = on_device("pose", devices[2]);
+    let original_stage = on_device(ORIGINAL_POSE, devices[2]);
+    let edge_key = chain_key(&input_key, &edge_stage, &(&config.edge, &edge_models));
     let start = config.input.first_frame;
     let original_key = chain_key(
         &input_key,
-        ORIGINAL_POSE,
+        &original_stage,
         &(&config.pose, &pose_models, sel.stride, start),
     );
     // An inpainting regenerator draws inside a mask made from the original
@@ -102,7 +110,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let needs_poses = config.regenerator.needs_poses();
     let regen_key = chain_key(
         &edge_key,
-        "regenerator",
+        &regen_stage,
         &(
             &config.regenerator,
             &regen_models,
@@ -114,8 +122,16 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     // regeneration, the rule that picks the frames. Edge maps and regenerated
     // images do not: changing the rule reuses every image already regenerated.
     let pose_key = match sel.tracking_key() {
-        None => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, start)),
-        Some(t) => chain_key(&regen_key, "pose", &(&config.pose, &pose_models, &t, start)),
+        None => chain_key(
+            &regen_key,
+            &pose_stage,
+            &(&config.pose, &pose_models, start),
+        ),
+        Some(t) => chain_key(
+            &regen_key,
+            &pose_stage,
+            &(&config.pose, &pose_models, &t, start),
+        ),
     };
     let original_pass = poor_mode || needs_poses;
     let caches = if config.run.cache {
@@ -143,14 +159,16 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         }
     };
     let mut records: BTreeMap<String, StageRecord> = BTreeMap::new();
-    for ((stage, kind), key) in registry::stage_kinds(config)
+    for (((stage, kind), key), device) in registry::stage_kinds(config)
         .into_iter()
         .zip([&edge_key, &regen_key, &pose_key])
+        .zip(devices)
     {
         records.insert(
             stage.to_string(),
             StageRecord {
                 kind,
+                device: device.to_string(),
                 cache_key: key[..16].to_string(),
                 ..StageRecord::default()
             },
@@ -162,6 +180,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
             ORIGINAL_POSE.to_string(),
             StageRecord {
                 kind,
+                device: devices[2].to_string(),
                 cache_key: original_key[..16].to_string(),
                 ..StageRecord::default()
             },
@@ -358,6 +377,24 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     summary.write_manifest(&opts.out)?;
     summary.kinematics = Some(kin);
     Ok(summary)
+}
+
+/// A GPU run needs a CUDA build; fails before any stage loads a model.
+pub(crate) fn cuda_check(device: Device) -> Result<(), PipelineError> {
+    if device.is_cpu() || cfg!(feature = "cuda") {
+        Ok(())
+    } else {
+        Err(gait_core::StageError::from(gait_core::NoCudaSupport).into())
+    }
+}
+
+/// The stage name that salts a cache key: plain on the CPU (keys of CPU runs
+/// are unchanged), with the device for a stage on a GPU.
+fn on_device(stage: &str, device: Device) -> String {
+    match device {
+        Device::Cpu => stage.to_string(),
+        d => format!("{stage}@{d}"),
+    }
 }
 
 fn write_csv(path: &Path, scorer: &str, seq: &PoseSequence) -> Result<(), PipelineError> {
