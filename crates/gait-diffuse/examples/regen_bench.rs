@@ -1,0 +1,162 @@
+//! Per-frame time of the ControlNet regenerator (text encoder once, then per
+//! frame: ControlNet + UNet for every step with guidance, VAE decode, image
+//! out), as `gait run` uses it. Driven by tools/gpu/bench_regen.sh, which
+//! writes random SD 1.5 weights and times diffusers on the same ones.
+//!
+//! Usage: regen_bench SD_DIR CONTROLNET_DIR EDGES_DIR [key=value ...]
+//! keys: device (cpu | cuda | cuda:N), dtype (f32 | f16 | bf16), steps,
+//! batch, frames (timed), warmup (untimed), scheduler (unipc | ddim).
+//! EDGES_DIR holds square grayscale PNG edge maps (white edges on black);
+//! frame i uses the (i mod n)-th. Prints one JSON line.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use gait_core::{Device, EdgeMap, Frame, ImageRegenerator, Resize, StageContext};
+use gait_diffuse::{ControlnetConfig, ControlnetRegenerator};
+
+type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+const USAGE: &str = "usage: regen_bench SD_DIR CONTROLNET_DIR EDGES_DIR [device=cuda] [dtype=f16] \
+                     [steps=20] [batch=1] [frames=8] [warmup=1] [scheduler=unipc]";
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("error: {e}");
+        std::process::exit(2);
+    }
+}
+
+fn run() -> Res<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.len() < 3 {
+        return Err(USAGE.into());
+    }
+    let mut opts: BTreeMap<String, String> = [
+        ("device", "cuda"),
+        ("dtype", "f16"),
+        ("steps", "20"),
+        ("batch", "1"),
+        ("frames", "8"),
+        ("warmup", "1"),
+        ("scheduler", "unipc"),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v.to_string()))
+    .collect();
+    for kv in &args[3..] {
+        let (k, v) = kv
+            .split_once('=')
+            .ok_or_else(|| format!("`{kv}`: expected key=value; {USAGE}"))?;
+        if !opts.contains_key(k) {
+            return Err(format!("unknown key `{k}`; {USAGE}").into());
+        }
+        opts.insert(k.to_string(), v.to_string());
+    }
+    let num = |k: &str| -> Res<usize> { Ok(opts[k].parse().map_err(|e| format!("{k}: {e}"))?) };
+    let device: Device = opts["device"].parse()?;
+    let (steps, batch, frames, warmup) =
+        (num("steps")?, num("batch")?, num("frames")?, num("warmup")?);
+    let edges = read_edges(Path::new(&args[2]))?;
+    let size = edges[0].width();
+
+    // Everything else (prompts, guidance 7.5, conditioning scale 1, seeds)
+    // stays at the regenerator's defaults, the paper's settings.
+    let config: ControlnetConfig = toml_config(&format!(
+        "sd_path = {:?}\ncontrolnet_path = {:?}\ndtype = {:?}\nsteps = {steps}\nbatch = {batch}\n\
+         resolution = {size}\nscheduler = {:?}\n",
+        abs(&args[0])?,
+        abs(&args[1])?,
+        opts["dtype"],
+        opts["scheduler"],
+    ))?;
+    let ctx = StageContext::new(".").on(device);
+    let t0 = Instant::now();
+    let mut regen = ControlnetRegenerator::new(&config, &ctx)?;
+    let load_s = t0.elapsed().as_secs_f64();
+
+    let mut per_frame = Vec::new();
+    let mut index = 0;
+    for call in 0..(warmup + frames.div_ceil(batch)) {
+        let (fs, es): (Vec<Frame>, Vec<EdgeMap>) = (0..batch)
+            .map(|_| {
+                let e = &edges[index % edges.len()];
+                index += 1;
+                let rgb = image::DynamicImage::ImageLuma8(e.clone()).to_rgb8();
+                (
+                    Frame::new(index, rgb),
+                    EdgeMap {
+                        index,
+                        image: e.clone(),
+                        resize: Resize::identity(size, size),
+                    },
+                )
+            })
+            .unzip();
+        let t = Instant::now();
+        let out = regen.regenerate(&fs, Some(&es))?;
+        let s = t.elapsed().as_secs_f64();
+        if out.len() != batch {
+            return Err(format!("{} frames in, {} out", batch, out.len()).into());
+        }
+        if call >= warmup {
+            per_frame.extend(std::iter::repeat_n(s / batch as f64, batch));
+        }
+    }
+    per_frame.truncate(frames);
+    let mut sorted = per_frame.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    println!(
+        "{{\"impl\": \"gait\", \"device\": \"{device}\", \"dtype\": {:?}, \"steps\": {steps}, \"batch\": {batch}, \
+         \"size\": {size}, \"load_s\": {load_s:.3}, \"median_s\": {median:.4}, \"per_frame_s\": {:?}}}",
+        opts["dtype"],
+        per_frame
+            .iter()
+            .map(|s| (s * 1e4).round() / 1e4)
+            .collect::<Vec<_>>()
+    );
+    Ok(())
+}
+
+fn toml_config(text: &str) -> Res<ControlnetConfig> {
+    Ok(toml::from_str(text)?)
+}
+
+fn abs(p: &str) -> Res<PathBuf> {
+    Ok(std::fs::canonicalize(p).map_err(|e| format!("{p}: {e}"))?)
+}
+
+/// The square grayscale PNGs of `dir`, sorted by name.
+fn read_edges(dir: &Path) -> Res<Vec<image::GrayImage>> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "png"))
+        .collect();
+    paths.sort();
+    let edges = paths
+        .iter()
+        .map(|p| {
+            Ok(image::open(p)
+                .map_err(|e| format!("{}: {e}", p.display()))?
+                .to_luma8())
+        })
+        .collect::<Res<Vec<_>>>()?;
+    match edges.first() {
+        None => Err(format!("{}: no .png edge maps", dir.display()).into()),
+        Some(e)
+            if edges
+                .iter()
+                .any(|x| x.dimensions() != (e.width(), e.width())) =>
+        {
+            Err(format!(
+                "{}: edge maps must be square and of one size",
+                dir.display()
+            )
+            .into())
+        }
+        Some(_) => Ok(edges),
+    }
+}
