@@ -15,7 +15,7 @@ The weights are written once (safetensors for candle and diffusers, ONNX with ex
 ort: the UNet is 3.4 GB in f32; about 10 GB of temporary disk in all, removed at the end).
 Each implementation then runs in its own process (load, then --repeats steps), the processes
 interleaved over --rounds rounds so a changing machine load hits all of them alike. Prints
-seconds per step (best over all steps) for each, the ratios to diffusers, and each
+seconds per step (best and median over all steps) for each, the ratios to diffusers, and each
 implementation's peak RSS (the largest over its processes, from wait4).
 """
 
@@ -23,6 +23,7 @@ import argparse
 import gc
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -52,9 +53,10 @@ def diffusers_worker(work, size, repeats, threads):
             print(f"diffusers step {i}: {time.perf_counter() - t0:.3f} s", flush=True)
 
 
-def prepare(work):
+def prepare(work, onnx):
     """SD 1.5's UNet (cross_attention_dim 768, the rest diffusers' defaults = SD 1.5) and
-    sd-controlnet-canny's ControlNet with random weights, as safetensors and as ONNX."""
+    sd-controlnet-canny's ControlNet with random weights, as safetensors and (when `onnx`,
+    for the ort side) as ONNX."""
     from diffusers import ControlNetModel, UNet2DConditionModel
 
     import export_onnx
@@ -68,6 +70,8 @@ def prepare(work):
     unet.save_pretrained(os.path.join(work, "sd", "unet"))
     cn.save_pretrained(os.path.join(work, "cn"))
     onnx_dir = os.path.join(work, "onnx")
+    if not onnx:
+        return onnx_dir
     n = export_onnx.export_controlnet(os.path.join(work, "cn"), onnx_dir, "f32", cn)
     export_onnx.export_unet(os.path.join(work, "sd", "unet"), onnx_dir, "f32", n, unet=unet, controlnet=cn)
     del unet, cn
@@ -96,17 +100,22 @@ def main():
     ap.add_argument("--repeats", type=int, default=2, help="steps per process")
     ap.add_argument("--rounds", type=int, default=1, help="interleaved processes per implementation")
     ap.add_argument("--threads", type=int, default=os.cpu_count())
+    ap.add_argument("--work", help="keep the weights in this folder and reuse them on later runs "
+                    "(default: a temporary folder, removed at the end)")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
         diffusers_worker(args.worker, args.size, args.repeats, args.threads)
         return
     impls = args.impls.split(",")
-    work = tempfile.mkdtemp(prefix="gait-bench-")
+    work = args.work or tempfile.mkdtemp(prefix="gait-bench-")
     try:
         t0 = time.perf_counter()
-        onnx_dir = prepare(work)
-        print(f"weights written and exported in {time.perf_counter() - t0:.0f} s", flush=True)
+        onnx_dir = os.path.join(work, "onnx")
+        ready = os.path.isdir(os.path.join(work, "cn")) and ("ort" not in impls or os.path.isdir(onnx_dir))
+        if not ready:
+            onnx_dir = prepare(work, "ort" in impls)
+            print(f"weights written and exported in {time.perf_counter() - t0:.0f} s", flush=True)
         cmds = {
             "diffusers": [sys.executable, os.path.abspath(__file__), "--worker", work, "--size", str(args.size),
                           "--repeats", str(args.repeats), "--threads", str(args.threads)],
@@ -123,14 +132,17 @@ def main():
                 times[impl] += t
                 peaks[impl] = max(peaks[impl], peak)
         best = {i: min(times[i]) for i in impls}
+        median = {i: statistics.median(times[i]) for i in impls}
         ref = best.get("diffusers")
         print(f"size {args.size}, threads {args.threads}, {args.rounds} round(s) x {args.repeats} steps")
         for i in impls:
-            ratio = f", {i}/diffusers time ratio {best[i] / ref:.2f}" if ref and i != "diffusers" else ""
-            print(f"{i}: best {best[i]:.2f} s/step (all: {', '.join(f'{x:.1f}' for x in times[i])})"
+            ratio = (f", {i}/diffusers ratio best {best[i] / ref:.2f}, median {median[i] / median['diffusers']:.2f}"
+                     if ref and i != "diffusers" else "")
+            print(f"{i}: best {best[i]:.2f} s/step, median {median[i]:.2f} (all: {', '.join(f'{x:.1f}' for x in times[i])})"
                   f"{ratio}; peak RSS {peaks[i]:.0f} MiB")
     finally:
-        shutil.rmtree(work, ignore_errors=True)
+        if not args.work:
+            shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == "__main__":

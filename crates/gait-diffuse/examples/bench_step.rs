@@ -49,8 +49,7 @@ fn candle(
     for i in 0..repeats {
         let t0 = Instant::now();
         let r = controlnet.forward(&x, 501.0, &ctx, &cond, 1.0)?;
-        let eps =
-            unet.forward_with_additional_residuals(&x, 501.0, &ctx, Some(&r.down), Some(&r.mid))?;
+        let eps = unet.forward_with_residuals(&x, 501.0, &ctx, &r)?;
         let _ = eps.sum_all()?.to_scalar::<f32>()?;
         println!("candle step {i}: {:.3} s", t0.elapsed().as_secs_f64());
     }

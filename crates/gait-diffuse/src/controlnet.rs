@@ -3,15 +3,12 @@
 //! plus an embedding of the condition image, whose per-resolution outputs pass
 //! through zero-initialised 1x1 convolutions into the UNet's skip connections.
 
-use candle_core::{Module, Result, Tensor};
-use candle_nn::{Conv2d, Conv2dConfig, VarBuilder, conv2d};
-use candle_transformers::models::stable_diffusion::embeddings::{TimestepEmbedding, Timesteps};
-use candle_transformers::models::stable_diffusion::unet_2d_blocks::{
-    CrossAttnDownBlock2D, CrossAttnDownBlock2DConfig, DownBlock2D, DownBlock2DConfig,
-    UNetMidBlock2DCrossAttn, UNetMidBlock2DCrossAttnConfig,
-};
+use candle_core::{Result, Tensor};
+use candle_nn::VarBuilder;
 
 use crate::model_config::UnetConfig;
+use crate::unet::encoder::Encoder;
+use crate::unet::{Conv2d, conv2d};
 
 /// Residuals a ControlNet adds to the UNet: one per skip connection, and one
 /// for the mid block.
@@ -48,25 +45,16 @@ struct CondEmbedding {
 
 impl CondEmbedding {
     fn new(vb: VarBuilder, cond_channels: usize, channels: &[usize], out: usize) -> Result<Self> {
-        let pad = Conv2dConfig {
-            padding: 1,
-            ..Default::default()
-        };
-        let stride2 = Conv2dConfig {
-            padding: 1,
-            stride: 2,
-            ..Default::default()
-        };
         let first = channels.first().copied().unwrap_or(16);
-        let conv_in = conv2d(cond_channels, first, 3, pad, vb.pp("conv_in"))?;
+        let conv_in = conv2d(cond_channels, first, 3, 1, 1, vb.pp("conv_in"))?;
         let mut blocks = Vec::new();
         let vbb = vb.pp("blocks");
         for (i, pair) in channels.windows(2).enumerate() {
-            blocks.push(conv2d(pair[0], pair[0], 3, pad, vbb.pp(2 * i))?);
-            blocks.push(conv2d(pair[0], pair[1], 3, stride2, vbb.pp(2 * i + 1))?);
+            blocks.push(conv2d(pair[0], pair[0], 3, 1, 1, vbb.pp(2 * i))?);
+            blocks.push(conv2d(pair[0], pair[1], 3, 2, 1, vbb.pp(2 * i + 1))?);
         }
         let last = channels.last().copied().unwrap_or(first);
-        let conv_out = conv2d(last, out, 3, pad, vb.pp("conv_out"))?;
+        let conv_out = conv2d(last, out, 3, 1, 1, vb.pp("conv_out"))?;
         Ok(Self {
             conv_in,
             blocks,
@@ -83,123 +71,47 @@ impl CondEmbedding {
     }
 }
 
-#[derive(Debug)]
-enum Down {
-    Plain(DownBlock2D),
-    CrossAttn(CrossAttnDownBlock2D),
-}
-
 /// diffusers' `ControlNetModel` (SD 1.x/2.x layout, no class embedding).
 #[derive(Debug)]
 pub struct ControlNet {
     conv_in: Conv2d,
-    time_proj: Timesteps,
-    time_embedding: TimestepEmbedding,
     cond_embedding: CondEmbedding,
-    down_blocks: Vec<Down>,
+    encoder: Encoder,
     zero_convs: Vec<Conv2d>,
-    mid_block: UNetMidBlock2DCrossAttn,
     mid_zero_conv: Conv2d,
 }
 
 impl ControlNet {
     /// Builds the model from `vb` (tensor names as in diffusers' safetensors).
     pub fn new(vb: VarBuilder, cfg: &UnetConfig) -> Result<Self> {
-        let unet = cfg
-            .to_candle()
-            .map_err(|e| candle_core::Error::Msg(e.to_string()))?;
+        let encoder = Encoder::new(vb.clone(), cfg)?;
         let ch0 = cfg.block_out_channels.first().copied().unwrap_or(320);
-        let temb = ch0 * 4;
-        let pad = Conv2dConfig {
-            padding: 1,
-            ..Default::default()
-        };
-        let conv_in = conv2d(cfg.in_channels, ch0, 3, pad, vb.pp("conv_in"))?;
-        let time_proj = Timesteps::new(ch0, cfg.flip_sin_to_cos, cfg.freq_shift);
-        let time_embedding = TimestepEmbedding::new(vb.pp("time_embedding"), ch0, temb)?;
         let cond_embedding = CondEmbedding::new(
             vb.pp("controlnet_cond_embedding"),
             cfg.conditioning_channels,
             &cfg.conditioning_embedding_out_channels,
             ch0,
         )?;
-
+        // One zero convolution per skip state: conv_in's, then each stage's.
         let zc = vb.pp("controlnet_down_blocks");
-        let one = Conv2dConfig::default();
-        let mut zero_convs = vec![conv2d(ch0, ch0, 1, one, zc.pp(0))?];
-        let mut down_blocks = Vec::new();
-        let n = unet.blocks.len();
-        for (i, block) in unet.blocks.iter().enumerate() {
-            let in_ch = if i == 0 {
-                ch0
-            } else {
-                unet.blocks[i - 1].out_channels
-            };
-            let out = block.out_channels;
-            let db = DownBlock2DConfig {
-                num_layers: unet.layers_per_block,
-                resnet_eps: unet.norm_eps,
-                resnet_groups: unet.norm_num_groups,
-                add_downsample: i + 1 < n,
-                downsample_padding: unet.downsample_padding,
-                ..Default::default()
-            };
-            let vbi = vb.pp("down_blocks").pp(i);
-            down_blocks.push(match block.use_cross_attn {
-                Some(layers) => Down::CrossAttn(CrossAttnDownBlock2D::new(
-                    vbi,
-                    in_ch,
-                    out,
-                    Some(temb),
-                    false,
-                    CrossAttnDownBlock2DConfig {
-                        downblock: db,
-                        attn_num_head_channels: block.attention_head_dim,
-                        cross_attention_dim: unet.cross_attention_dim,
-                        sliced_attention_size: None,
-                        use_linear_projection: unet.use_linear_projection,
-                        transformer_layers_per_block: layers,
-                    },
-                )?),
-                None => Down::Plain(DownBlock2D::new(vbi, in_ch, out, Some(temb), db)?),
-            });
-            let convs = unet.layers_per_block + usize::from(i + 1 < n);
-            for _ in 0..convs {
-                let k = zero_convs.len();
-                zero_convs.push(conv2d(out, out, 1, one, zc.pp(k))?);
-            }
+        let mut channels = vec![ch0];
+        let n = cfg.block_out_channels.len();
+        for (i, &c) in cfg.block_out_channels.iter().enumerate() {
+            let states = cfg.layers_per_block + usize::from(i + 1 < n);
+            channels.extend(std::iter::repeat_n(c, states));
         }
-        let last = unet.blocks.last().map_or(ch0, |b| b.out_channels);
-        let mid_block = UNetMidBlock2DCrossAttn::new(
-            vb.pp("mid_block"),
-            last,
-            Some(temb),
-            false,
-            UNetMidBlock2DCrossAttnConfig {
-                resnet_eps: unet.norm_eps,
-                output_scale_factor: unet.mid_block_scale_factor,
-                cross_attn_dim: unet.cross_attention_dim,
-                attn_num_head_channels: unet.blocks.last().map_or(8, |b| b.attention_head_dim),
-                resnet_groups: Some(unet.norm_num_groups),
-                use_linear_projection: unet.use_linear_projection,
-                transformer_layers_per_block: unet
-                    .blocks
-                    .last()
-                    .and_then(|b| b.use_cross_attn)
-                    .unwrap_or(1),
-                ..Default::default()
-            },
-        )?;
-        let mid_zero_conv = conv2d(last, last, 1, one, vb.pp("controlnet_mid_block"))?;
+        let zero_convs = channels
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| conv2d(c, c, 1, 1, 0, zc.pp(k)))
+            .collect::<Result<Vec<_>>>()?;
+        let last = cfg.block_out_channels.last().copied().unwrap_or(ch0);
         Ok(Self {
-            conv_in,
-            time_proj,
-            time_embedding,
+            conv_in: conv2d(cfg.in_channels, ch0, 3, 1, 1, vb.pp("conv_in"))?,
             cond_embedding,
-            down_blocks,
+            encoder,
             zero_convs,
-            mid_block,
-            mid_zero_conv,
+            mid_zero_conv: conv2d(last, last, 1, 1, 0, vb.pp("controlnet_mid_block"))?,
         })
     }
 
@@ -214,22 +126,13 @@ impl ControlNet {
         cond: &Tensor,
         scale: f64,
     ) -> Result<ControlResiduals> {
-        let b = sample.dim(0)?;
-        let t = (Tensor::ones(b, sample.dtype(), sample.device())? * timestep)?;
-        let emb = self.time_embedding.forward(&self.time_proj.forward(&t)?)?;
-        let x = (self.conv_in.forward(sample)? + self.cond_embedding.forward(cond)?)?;
-        let mut res = vec![x.clone()];
-        let mut x = x;
-        for block in &self.down_blocks {
-            let (next, r) = match block {
-                Down::Plain(d) => d.forward(&x, Some(&emb))?,
-                Down::CrossAttn(d) => d.forward(&x, Some(&emb), Some(context))?,
-            };
-            res.extend(r);
-            x = next;
-        }
-        let mid = self.mid_block.forward(&x, Some(&emb), Some(context))?;
-        let down = res
+        let temb = self.encoder.time(timestep, sample)?;
+        let x =
+            self.conv_in
+                .forward_with(sample, None, Some(&self.cond_embedding.forward(cond)?))?;
+        let (x, states) = self.encoder.down(x, &temb, context)?;
+        let mid = self.encoder.mid(&x, &temb, context)?;
+        let down = states
             .iter()
             .zip(&self.zero_convs)
             .map(|(r, c)| c.forward(r)? * scale)

@@ -2,6 +2,7 @@
 //! the `[regenerator]` table of a pipeline config by `kind`: `passthrough`
 //! (the paper's baseline) and `controlnet` (SD 1.5 + canny ControlNet on candle,
 //! or on ONNX Runtime from the exports of tools/diffuse/export_onnx.py).
+//! The candle UNet and ControlNet are our own ([`unet`]); VAE from candle-transformers.
 
 mod clip_text;
 mod config;
@@ -18,6 +19,7 @@ mod pipeline;
 mod regenerator;
 mod schedule;
 mod tokenizer;
+pub mod unet;
 mod vae_encoder;
 mod warp;
 pub mod weights;

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use candle_transformers::models::stable_diffusion::{unet_2d, vae};
+use candle_transformers::models::stable_diffusion::vae;
 use serde::Deserialize;
 
 use crate::DiffuseError;
@@ -19,7 +19,8 @@ pub enum PerBlock {
 }
 
 impl PerBlock {
-    fn get(&self, i: usize) -> usize {
+    /// The value for down stage `i`.
+    pub fn get(&self, i: usize) -> usize {
         match self {
             PerBlock::One(v) => *v,
             PerBlock::Each(v) => v.get(i).or(v.last()).copied().unwrap_or(8),
@@ -38,6 +39,8 @@ pub struct UnetConfig {
     pub layers_per_block: usize,
     pub cross_attention_dim: usize,
     pub attention_head_dim: PerBlock,
+    /// Heads per stage; when unset diffusers takes `attention_head_dim` (SD 1.x's naming).
+    pub num_attention_heads: Option<PerBlock>,
     pub norm_num_groups: usize,
     pub norm_eps: f64,
     pub flip_sin_to_cos: bool,
@@ -67,6 +70,7 @@ impl Default for UnetConfig {
             layers_per_block: 2,
             cross_attention_dim: 768,
             attention_head_dim: PerBlock::One(8),
+            num_attention_heads: None,
             norm_num_groups: 32,
             norm_eps: 1e-5,
             flip_sin_to_cos: true,
@@ -78,44 +82,6 @@ impl Default for UnetConfig {
             conditioning_embedding_out_channels: vec![16, 32, 96, 256],
             conditioning_channels: 3,
         }
-    }
-}
-
-impl UnetConfig {
-    /// candle-transformers' UNet configuration for these values.
-    pub fn to_candle(&self) -> Result<unet_2d::UNet2DConditionModelConfig, DiffuseError> {
-        if self.block_out_channels.len() != self.down_block_types.len() {
-            return Err(DiffuseError::Config(
-                "block_out_channels and down_block_types differ in length".into(),
-            ));
-        }
-        let blocks = self
-            .block_out_channels
-            .iter()
-            .zip(&self.down_block_types)
-            .enumerate()
-            .map(|(i, (&out_channels, kind))| unet_2d::BlockConfig {
-                out_channels,
-                use_cross_attn: kind
-                    .starts_with("CrossAttn")
-                    .then_some(self.transformer_layers_per_block),
-                attention_head_dim: self.attention_head_dim.get(i),
-            })
-            .collect();
-        Ok(unet_2d::UNet2DConditionModelConfig {
-            center_input_sample: false,
-            flip_sin_to_cos: self.flip_sin_to_cos,
-            freq_shift: self.freq_shift,
-            blocks,
-            layers_per_block: self.layers_per_block,
-            downsample_padding: self.downsample_padding,
-            mid_block_scale_factor: self.mid_block_scale_factor,
-            norm_num_groups: self.norm_num_groups,
-            norm_eps: self.norm_eps,
-            cross_attention_dim: self.cross_attention_dim,
-            sliced_attention_size: None,
-            use_linear_projection: self.use_linear_projection,
-        })
     }
 }
 
@@ -208,17 +174,24 @@ mod tests {
     use super::*;
 
     #[test]
-    fn sd15_defaults_match_candle_v1_5_layout() {
-        let c = UnetConfig::default().to_candle().unwrap();
-        assert_eq!(c.blocks.len(), 4);
-        assert_eq!(c.blocks[3].use_cross_attn, None);
-        assert_eq!(c.cross_attention_dim, 768);
+    fn sd15_defaults_give_the_v1_5_layout() {
+        let s = crate::unet::encoder::stages(&UnetConfig::default()).unwrap();
+        assert_eq!(s.len(), 4);
+        assert_eq!(s[0].heads, Some(8));
+        assert_eq!(s[3].heads, None);
+        assert_eq!(UnetConfig::default().cross_attention_dim, 768);
         assert_eq!(VaeConfig::default().scale_factor(), 8);
     }
 
     #[test]
-    fn per_block_head_dims_parse() {
+    fn per_block_head_counts_parse() {
         let c: UnetConfig = serde_json::from_str(r#"{"attention_head_dim":[5,10,20,20]}"#).unwrap();
-        assert_eq!(c.to_candle().unwrap().blocks[2].attention_head_dim, 20);
+        assert_eq!(crate::unet::encoder::stages(&c).unwrap()[2].heads, Some(20));
+        let c: UnetConfig =
+            serde_json::from_str(r#"{"attention_head_dim":8,"num_attention_heads":[1,2,3,4]}"#)
+                .unwrap();
+        assert_eq!(crate::unet::encoder::stages(&c).unwrap()[1].heads, Some(2));
+        let c: UnetConfig = serde_json::from_str(r#"{"in_channels":9}"#).unwrap();
+        assert_eq!(c.in_channels, 9);
     }
 }

@@ -78,13 +78,9 @@ impl DiffusionModels for Models {
         context: &Tensor,
         residuals: &ControlResiduals,
     ) -> Result<Tensor, DiffuseError> {
-        Ok(self.unet.forward_with_additional_residuals(
-            sample,
-            timestep,
-            context,
-            Some(&residuals.down),
-            Some(&residuals.mid),
-        )?)
+        Ok(self
+            .unet
+            .forward_with_residuals(sample, timestep, context, residuals)?)
     }
 
     fn decode(&self, latents: &Tensor) -> Result<Tensor, DiffuseError> {

@@ -9,14 +9,13 @@ use std::sync::Mutex;
 use candle_core::{DType, Device, Shape, Tensor};
 use candle_nn::VarBuilder;
 use candle_nn::var_builder::SimpleBackend;
-use candle_transformers::models::stable_diffusion::{
-    unet_2d::UNet2DConditionModel, vae::AutoEncoderKL,
-};
+use candle_transformers::models::stable_diffusion::vae::AutoEncoderKL;
 
 use crate::DiffuseError;
 use crate::clip_text::ClipTextModel;
 use crate::controlnet::ControlNet;
 use crate::model_config::{TextConfig, UnetConfig, VaeConfig, read_config};
+use crate::unet::UNet2DConditionModel;
 use crate::vae_encoder::VaeEncoder;
 
 /// Weight file of each component inside the SD folder (diffusers layout).
@@ -150,12 +149,9 @@ impl Models {
     }
 }
 
-/// candle-transformers' UNet from a diffusers UNet config.
+/// Our UNet from a diffusers UNet config.
 pub fn build_unet(vb: VarBuilder, cfg: &UnetConfig) -> candle_core::Result<UNet2DConditionModel> {
-    let c = cfg
-        .to_candle()
-        .map_err(|e| candle_core::Error::Msg(e.to_string()))?;
-    UNet2DConditionModel::new(vb, cfg.in_channels, cfg.out_channels, false, c)
+    UNet2DConditionModel::new(vb, cfg)
 }
 
 /// A VarBuilder backend that hands out unallocated (broadcast) zero tensors and

@@ -19,12 +19,6 @@ use gait_diffuse::{
 };
 
 const TOL: f64 = 1e-4;
-/// candle-transformers 0.11.1's GEGLU (UNet and ControlNet transformer
-/// blocks) uses the tanh GELU where diffusers uses erf; against diffusers run
-/// with the tanh GELU (`modes.tanh.*`) the candle pipelines are held to
-/// `TOL`, against stock diffusers to this (as tiny_models.rs; the ort tests
-/// hold the stock images to 1e-4).
-const TOL_ERF_GELU: f64 = 2e-3;
 
 fn pipeline() -> ControlnetPipeline {
     ControlnetPipeline::load_with_encoder(
@@ -85,16 +79,10 @@ fn img2img_matches_diffusers() {
             )
             .unwrap();
         assert_close(
-            &format!("img2img {name} (tanh GELU reference)"),
-            &img,
-            &e[&format!("modes.tanh.img2img.{name}.image")],
-            TOL,
-        );
-        assert_close(
-            &format!("img2img {name} (stock diffusers)"),
+            &format!("img2img {name}"),
             &img,
             &e[&format!("modes.img2img.{name}.image")],
-            TOL_ERF_GELU,
+            TOL,
         );
     }
 }
@@ -138,18 +126,7 @@ fn inpaint_matches_diffusers() {
                 &modes_params(kind),
             )
             .unwrap();
-        assert_close(
-            &format!("inpaint {name} (tanh GELU reference)"),
-            &img,
-            &e[&key.replace("modes.", "modes.tanh.")],
-            TOL,
-        );
-        assert_close(
-            &format!("inpaint {name} (stock diffusers)"),
-            &img,
-            &e[key],
-            TOL_ERF_GELU,
-        );
+        assert_close(&format!("inpaint {name}"), &img, &e[key], TOL);
     }
 }
 
@@ -346,12 +323,7 @@ fn half_precision_modes_track_the_reference() {
         .unwrap();
     assert_eq!(img.dtype(), DType::F32);
     // As dtypes.rs: f16 weights and activations, within 5e-2 of f32 diffusers.
-    assert_close(
-        "img2img f16",
-        &img,
-        &e["modes.tanh.img2img.unipc.image"],
-        5e-2,
-    );
+    assert_close("img2img f16", &img, &e["modes.img2img.unipc.image"], 5e-2);
     let mask = modes_mask(&e);
     let img = pipe
         .inpaint(
@@ -365,12 +337,7 @@ fn half_precision_modes_track_the_reference() {
             &p,
         )
         .unwrap();
-    assert_close(
-        "inpaint f16",
-        &img,
-        &e["modes.tanh.inpaint.unipc.image"],
-        5e-2,
-    );
+    assert_close("inpaint f16", &img, &e["modes.inpaint.unipc.image"], 5e-2);
 }
 
 #[test]

@@ -121,8 +121,8 @@ fn regenerator_on_ort_matches_candle_frames() {
     let b = candle.regenerate(&frames, Some(&edges)).unwrap();
     for (x, y) in a.iter().zip(&b) {
         assert_eq!((x.index, x.width(), x.height()), (y.index, 80, 60));
-        // candle's UNet differs from diffusers by up to 1e-3 relative (its
-        // tanh GELU, see tiny_models.rs); 8-bit frames then differ by a level or so.
+        // Both backends are within ~1e-5 of diffusers (tiny_models.rs), so
+        // 8-bit frames differ at most where a value sits on a rounding boundary.
         let d = x
             .image
             .as_raw()
@@ -131,7 +131,7 @@ fn regenerator_on_ort_matches_candle_frames() {
             .map(|(p, q)| p.abs_diff(*q))
             .max()
             .unwrap_or(0);
-        assert!(d <= 2, "ort and candle frames differ by {d} levels");
+        assert!(d <= 1, "ort and candle frames differ by {d} levels");
     }
     assert_ne!(a[0].image, a[1].image, "per-frame seeds differ on ort");
 }

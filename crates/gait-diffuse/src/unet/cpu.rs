@@ -1,0 +1,154 @@
+//! Access to the f32 buffers of contiguous CPU tensors, the one matrix
+//! product all our CPU kernels are built on, and a vectorisable `exp`.
+//! The kernels in this folder use these when their inputs are f32 on the CPU;
+//! every other case goes through candle's ops.
+
+use candle_core::{CpuStorage, DType, Device, Result, Storage, Tensor};
+
+/// True when `t` is an f32 tensor on the CPU (the fast kernels' domain).
+pub(crate) fn is_cpu_f32(t: &Tensor) -> bool {
+    t.dtype() == DType::F32 && t.device().is_cpu()
+}
+
+/// Runs `f` on the f32 values of `t` in row-major order (copying only when
+/// `t` is a strided view).
+pub(crate) fn with_f32<R>(t: &Tensor, f: impl FnOnce(&[f32]) -> Result<R>) -> Result<R> {
+    let t = t.contiguous()?;
+    let (storage, layout) = t.storage_and_layout();
+    let Storage::Cpu(CpuStorage::F32(data)) = &*storage else {
+        candle_core::bail!("expected an f32 CPU tensor, got {:?}", t.dtype());
+    };
+    let Some((start, end)) = layout.contiguous_offsets() else {
+        candle_core::bail!("tensor is not contiguous after contiguous()");
+    };
+    f(&data[start..end])
+}
+
+/// An f32 CPU tensor owning `data`.
+pub(crate) fn tensor(data: Vec<f32>, shape: &[usize]) -> Result<Tensor> {
+    Tensor::from_vec(data, shape, &Device::Cpu)
+}
+
+/// A raw pointer that rayon tasks writing disjoint parts of one buffer share.
+#[derive(Clone, Copy)]
+pub(crate) struct SharedMut(pub *mut f32);
+// SAFETY: every user writes a region no other task touches.
+unsafe impl Send for SharedMut {}
+unsafe impl Sync for SharedMut {}
+
+impl SharedMut {
+    /// The pointer (a method, so closures capture the whole Sync wrapper).
+    pub fn get(self) -> *mut f32 {
+        self.0
+    }
+}
+
+/// A strided matrix view: element (i, j) at `ptr + i * rs + j * cs`.
+#[derive(Clone, Copy)]
+pub(crate) struct View {
+    pub ptr: *const f32,
+    pub rs: isize,
+    pub cs: isize,
+}
+
+/// `dst (m x n) = [dst +] lhs (m x k) @ rhs (k x n)`, on all threads when
+/// `parallel` (the caller is not already inside a parallel loop).
+///
+/// # Safety
+/// Every view must address valid memory for its whole (m|k) x (k|n) extent
+/// and `dst` must not overlap the inputs.
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn matmul(
+    (m, n, k): (usize, usize, usize),
+    dst: *mut f32,
+    dst_rs: isize,
+    accumulate: bool,
+    lhs: View,
+    rhs: View,
+    parallel: bool,
+) {
+    let par = if parallel && candle_core::utils::get_num_threads() > 1 {
+        gemm::Parallelism::Rayon(candle_core::utils::get_num_threads())
+    } else {
+        gemm::Parallelism::None
+    };
+    // SAFETY: forwarded from the caller.
+    unsafe {
+        gemm::gemm(
+            m, n, k, dst, 1, dst_rs, accumulate, lhs.ptr, lhs.cs, lhs.rs, rhs.ptr, rhs.cs, rhs.rs,
+            1.0, 1.0, false, false, false, par,
+        )
+    }
+}
+
+/// `exp(x)` (clamped to [-87.3, 88]), within a few ulp (Cephes' `expf` reduction and
+/// polynomial), written without branches so loops over it vectorise.
+#[inline(always)]
+pub(crate) fn exp(x: f32) -> f32 {
+    let x = x.clamp(-87.3, 88.0);
+    let k = (x * std::f32::consts::LOG2_E + 0.5).floor();
+    // ln 2 split in two so k * ln2 is exact enough.
+    let r = x - k * 0.693_359_4 + k * 2.121_944_4e-4;
+    let z = r * r;
+    let p = ((((1.987_569_1e-4 * r + 1.398_199_9e-3) * r + 8.333_452e-3) * r + 4.166_579_6e-2) * r
+        + 1.666_666_5e-1)
+        * r
+        + 0.5;
+    let y = p * z + r + 1.0;
+    y * f32::from_bits(((k as i32 + 127) << 23) as u32)
+}
+
+/// `x * sigmoid(x)`.
+#[inline(always)]
+pub(crate) fn silu(x: f32) -> f32 {
+    x / (1.0 + exp(-x))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exp_is_accurate_over_softmax_range() {
+        let mut worst = 0f64;
+        for i in 0..200_000 {
+            let x = -87.0 + i as f32 * (87.0 + 10.0) / 200_000.0;
+            let want = f64::from(x).exp();
+            let got = f64::from(exp(x));
+            worst = worst.max(((got - want) / want).abs());
+        }
+        assert!(worst < 1e-6, "worst relative error {worst:e}");
+        assert!(exp(-1e9) >= 0.0 && exp(-1e9) < 1e-37);
+        assert!(
+            (silu(-100.0)).abs() < 1e-30 && (silu(3.0) - 3.0 / (1.0 + (-3f32).exp())).abs() < 1e-6
+        );
+    }
+
+    #[test]
+    fn matmul_handles_strided_views_and_accumulates() {
+        // lhs 2x3 stored transposed, rhs 3x2 row-major.
+        let lhs_t = [1f32, 4.0, 2.0, 5.0, 3.0, 6.0];
+        let rhs = [1f32, 0.0, 0.0, 1.0, 1.0, 1.0];
+        let mut dst = [10f32, 0.0, 0.0, 0.0];
+        unsafe {
+            matmul(
+                (2, 2, 3),
+                dst.as_mut_ptr(),
+                2,
+                true,
+                View {
+                    ptr: lhs_t.as_ptr(),
+                    rs: 1,
+                    cs: 2,
+                },
+                View {
+                    ptr: rhs.as_ptr(),
+                    rs: 2,
+                    cs: 1,
+                },
+                true,
+            )
+        };
+        assert_eq!(dst, [14.0, 5.0, 10.0, 11.0]);
+    }
+}

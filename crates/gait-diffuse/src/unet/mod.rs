@@ -1,0 +1,20 @@
+//! Our SD UNet and its building blocks, with diffusers' structure and tensor
+//! names so the real checkpoints load unchanged, numerically as diffusers
+//! (exact erf GELU in the feed-forward), and with fused CPU kernels for the
+//! hot spots (convolutions as shifted matrix products, attention without a
+//! score tensor, GroupNorm + SiLU in one pass).
+
+mod attention;
+mod blocks;
+mod conv;
+mod cpu;
+mod embeddings;
+pub(crate) mod encoder;
+mod model;
+mod norm;
+mod resnet;
+mod transformer;
+
+pub use conv::{Conv2d, conv2d};
+pub use embeddings::{TimestepEmbedding, Timesteps};
+pub use model::UNet2DConditionModel;
