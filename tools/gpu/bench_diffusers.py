@@ -29,10 +29,11 @@ MERGES = os.path.join(FIXTURES, "tokenizer", "merges.txt")
 VIDEO = os.path.join(ROOT, "data", "sample", "sports2d-demo.mp4")
 PROMPT = "an able-body person walking, intact lower limbs, 2 legs, full-body portrait, realistic"
 NEGATIVE = "cyborg, amputee, panfuturism"
-# runwayml/stable-diffusion-v1-5 scheduler/scheduler_config.json (the schedule our UniPC uses).
+# runwayml/stable-diffusion-v1-5 scheduler/scheduler_config.json, the keys UniPC takes (the
+# schedule our UniPC uses).
 SCHEDULER = dict(
     num_train_timesteps=1000, beta_start=0.00085, beta_end=0.012, beta_schedule="scaled_linear",
-    steps_offset=1, set_alpha_to_one=False, clip_sample=False, prediction_type="epsilon",
+    steps_offset=1, prediction_type="epsilon",
 )
 
 
@@ -145,7 +146,8 @@ def diffusers_run(args):
     pipe = StableDiffusionControlNetPipeline(
         vae=AutoencoderKL.from_pretrained(os.path.join(sd, "vae"), torch_dtype=dtype),
         text_encoder=CLIPTextModel.from_pretrained(os.path.join(sd, "text_encoder"), torch_dtype=dtype),
-        tokenizer=CLIPTokenizer(os.path.join(sd, "tokenizer", "vocab.json"), os.path.join(sd, "tokenizer", "merges.txt")),
+        tokenizer=CLIPTokenizer(os.path.join(sd, "tokenizer", "vocab.json"), os.path.join(sd, "tokenizer", "merges.txt"),
+                                model_max_length=77),
         unet=UNet2DConditionModel.from_pretrained(os.path.join(sd, "unet"), torch_dtype=dtype),
         controlnet=ControlNetModel.from_pretrained(os.path.join(args.weights, "controlnet"), torch_dtype=dtype),
         scheduler=UniPCMultistepScheduler(**SCHEDULER),

@@ -9,7 +9,7 @@
 #
 #   tools/gpu/bench_regen.sh            # on the GPU machine, binaries from .gpu/bin
 #   tools/gpu/bench_regen.sh --dry-run  # anywhere: CPU, f32, the tests' tiny models, 2 steps,
-#                                       # few frames: proves the logic, times nothing useful
+#                                       # 64x64, few frames: proves the logic, times nothing
 # Env: BIN (folder of `gait` and `regen_bench`, default .gpu/bin), MODELS (BlazePose models,
 # default .gpu/models), WORK (scratch, default /tmp/gait-gpu-bench), ROUNDS (3), FRAMES (8
 # timed frames per process), BATCH (our batched run, 4), E2E_FRAMES (300), PYTHON (python3),
@@ -26,9 +26,9 @@ frames=${FRAMES:-8}
 batch=${BATCH:-4}
 e2e_frames=${E2E_FRAMES:-300}
 parts=${PARTS:-frames e2e}
-device=cuda dtype=f16 steps=20 tiny=
+device=cuda dtype=f16 steps=20 tiny= size=512
 if [ "${1:-}" = --dry-run ]; then
-    device=cpu dtype=f32 steps=2 tiny=--tiny
+    device=cpu dtype=f32 steps=2 tiny=--tiny size=64
     rounds=${ROUNDS:-2} frames=${FRAMES:-2} batch=${BATCH:-2} e2e_frames=${E2E_FRAMES:-12}
 fi
 bench="$python $root/tools/gpu/bench_diffusers.py"
@@ -63,7 +63,7 @@ fi
 echo "{\"gpu\": \"$gpu\", \"date\": \"$(date -u +%F)\", \"rounds\": $rounds}" >>"$results"
 
 t=$(date +%s)
-$bench prepare "$work" $tiny --frames "$e2e_frames"
+$bench prepare "$work" $tiny --frames "$e2e_frames" --size "$size"
 echo "weights and frames: $(($(date +%s) - t)) s"
 
 for r in $(seq "$rounds"); do
