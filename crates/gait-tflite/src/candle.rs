@@ -132,7 +132,8 @@ impl CandleGraph {
                     let ws = four(shape(input(1)?), "weights")?;
                     let os = four(shape(out), "output")?;
                     let [o, kh, kw, _] = ws;
-                    let mut conv = Conv::new(&konst(input(1)?)?, ws, bias(o)?, act);
+                    let mut conv = Conv::new(&konst(input(1)?)?, ws, bias(o)?, act)
+                        .map_err(|e| format!("operator {k}: {e}"))?;
                     conv.stride = *stride;
                     conv.dilation = *dilation;
                     conv.pad = (
@@ -257,11 +258,14 @@ impl CandleGraph {
                     }
                     let wv = konst(input(1)?)?;
                     let b = bias(o)?;
+                    if wv.len() != o * kh * kw * i || b.len() != o {
+                        return Err(format!("operator {k}: custom op weights or bias size"));
+                    }
                     // [i, (dy, dx, o)]: the channel order depth-to-space reads.
                     let cols = kh * kw * o;
                     let mut m = vec![0f32; i * cols];
                     let mut tiled = vec![0f32; cols];
-                    for oc in 0..o {
+                    for (oc, &bo) in b.iter().enumerate() {
                         for dy in 0..kh {
                             for dx in 0..kw {
                                 let col = (dy * kw + dx) * o + oc;
@@ -269,7 +273,7 @@ impl CandleGraph {
                                 for (ic, v) in wv[src..src + i].iter().enumerate() {
                                     m[ic * cols + col] = *v;
                                 }
-                                tiled[col] = b[oc];
+                                tiled[col] = bo;
                             }
                         }
                     }

@@ -29,16 +29,28 @@ pub(crate) struct Conv {
 impl Conv {
     /// From TFLite's [cout, kh, kw, cin] weights; geometry fields default to
     /// a 1x1 stride-1 convolution over an `out_size` of (0, 0) (set them).
-    pub fn new(ohwi: &[f32], dims: [usize; 4], bias: Vec<f32>, act: Activation) -> Self {
+    pub fn new(
+        ohwi: &[f32],
+        dims: [usize; 4],
+        bias: Vec<f32>,
+        act: Activation,
+    ) -> Result<Self, String> {
         let [o, kh, kw, i] = dims;
         let k = kh * kw * i;
+        if ohwi.len() != o * k || bias.len() != o {
+            return Err(format!(
+                "conv2d: {} weights and {} biases for shape {dims:?}",
+                ohwi.len(),
+                bias.len()
+            ));
+        }
         let mut w = vec![0f32; k * o];
         for (oc, row) in ohwi.chunks_exact(k).enumerate() {
             for (j, v) in row.iter().enumerate() {
                 w[j * o + oc] = *v;
             }
         }
-        Self {
+        Ok(Self {
             w,
             bias,
             kernel: (kh, kw),
@@ -48,7 +60,7 @@ impl Conv {
             out_size: (0, 0),
             cin: i,
             act,
-        }
+        })
     }
 
     /// From a packed [cin, cout] matrix (row-major) and `cout` biases.
@@ -188,9 +200,7 @@ mod tests {
     }
 
     fn check(
-        h: usize,
-        w: usize,
-        cin: usize,
+        (h, w, cin): (usize, usize, usize),
         cout: usize,
         k: usize,
         stride: usize,
@@ -206,7 +216,8 @@ mod tests {
             [cout, k, k, cin],
             b.to_vec1::<f32>().unwrap(),
             Activation::Relu6,
-        );
+        )
+        .unwrap();
         conv.stride = (stride, stride);
         conv.dilation = (dil, dil);
         conv.pad = (pad, pad);
@@ -224,15 +235,15 @@ mod tests {
     #[test]
     fn pointwise_matches_candle_conv2d() {
         // More rows than one gemm block, so block boundaries are covered.
-        check(37, 41, 13, 24, 1, 1, 1, 0, (37, 41));
-        check(5, 3, 7, 2000, 1, 1, 1, 0, (5, 3));
+        check((37, 41, 13), 24, 1, 1, 1, 0, (37, 41));
+        check((5, 3, 7), 2000, 1, 1, 1, 0, (5, 3));
     }
 
     #[test]
     fn strided_padded_conv_matches_candle_conv2d() {
         // TFLite SAME 3x3 stride 2 on 16x15: 8x8 out, nothing before, odd pixel after.
-        check(16, 15, 3, 8, 3, 2, 1, 0, (8, 8));
-        check(9, 9, 5, 6, 5, 1, 1, 2, (9, 9));
-        check(11, 10, 4, 3, 3, 1, 2, 2, (11, 10));
+        check((16, 15, 3), 8, 3, 2, 1, 0, (8, 8));
+        check((9, 9, 5), 6, 5, 1, 1, 2, (9, 9));
+        check((11, 10, 4), 3, 3, 1, 2, 2, (11, 10));
     }
 }

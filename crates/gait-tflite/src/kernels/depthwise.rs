@@ -172,9 +172,7 @@ mod tests {
     }
 
     fn check(
-        h: usize,
-        w: usize,
-        c: usize,
+        (h, w, c): (usize, usize, usize),
         mult: usize,
         k: usize,
         s: usize,
@@ -207,11 +205,11 @@ mod tests {
     #[test]
     fn matches_candle_grouped_conv2d() {
         // 5x5 SAME stride 1 with 16 + 8 + 3 channels (every block width).
-        check(9, 7, 27, 1, 5, 1, 1, 2, (9, 7));
+        check((9, 7, 27), 1, 5, 1, 1, 2, (9, 7));
         // 3x3 SAME stride 2 (odd padding pixel after), 3x3 dilated.
-        check(10, 9, 24, 1, 3, 2, 1, 0, (5, 5));
-        check(8, 8, 5, 1, 3, 1, 2, 2, (8, 8));
+        check((10, 9, 24), 1, 3, 2, 1, 0, (5, 5));
+        check((8, 8, 5), 1, 3, 1, 2, 2, (8, 8));
         // Channel multiplier 2, VALID.
-        check(6, 6, 3, 2, 3, 1, 1, 0, (4, 4));
+        check((6, 6, 3), 2, 3, 1, 1, 0, (4, 4));
     }
 }

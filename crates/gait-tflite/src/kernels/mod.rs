@@ -15,6 +15,12 @@ use candle_core::{CpuStorage, CustomOp1, CustomOp2, Layout, Shape, Tensor, bail}
 /// Output of a kernel: data and shape.
 pub(crate) type Out = candle_core::Result<(Vec<f32>, Shape)>;
 
+/// A kernel on one input's data and dims.
+pub(crate) type Kernel1<'a> = dyn Fn(&[f32], &[usize]) -> Out + Send + Sync + 'a;
+
+/// A kernel on two inputs' data and dims.
+pub(crate) type Kernel2<'a> = dyn Fn(&[f32], &[usize], &[f32], &[usize]) -> Out + Send + Sync + 'a;
+
 fn slice<'a>(
     storage: &'a CpuStorage,
     layout: &Layout,
@@ -32,7 +38,7 @@ fn slice<'a>(
 /// A one-input kernel as a candle op.
 struct Op1<'a> {
     name: &'static str,
-    f: &'a (dyn Fn(&[f32], &[usize]) -> Out + Send + Sync),
+    f: &'a Kernel1<'a>,
 }
 
 impl CustomOp1 for Op1<'_> {
@@ -49,7 +55,7 @@ impl CustomOp1 for Op1<'_> {
 /// A two-input kernel as a candle op.
 struct Op2<'a> {
     name: &'static str,
-    f: &'a (dyn Fn(&[f32], &[usize], &[f32], &[usize]) -> Out + Send + Sync),
+    f: &'a Kernel2<'a>,
 }
 
 impl CustomOp2 for Op2<'_> {
@@ -72,11 +78,7 @@ impl CustomOp2 for Op2<'_> {
 }
 
 /// Runs `f` on the contiguous f32 data of `x` (copied first if strided).
-pub(crate) fn apply1(
-    x: &Tensor,
-    name: &'static str,
-    f: &(dyn Fn(&[f32], &[usize]) -> Out + Send + Sync),
-) -> candle_core::Result<Tensor> {
+pub(crate) fn apply1(x: &Tensor, name: &'static str, f: &Kernel1) -> candle_core::Result<Tensor> {
     let x = x.contiguous()?;
     x.apply_op1_no_bwd(&Op1 { name, f })
 }
@@ -86,7 +88,7 @@ pub(crate) fn apply2(
     a: &Tensor,
     b: &Tensor,
     name: &'static str,
-    f: &(dyn Fn(&[f32], &[usize], &[f32], &[usize]) -> Out + Send + Sync),
+    f: &Kernel2<'_>,
 ) -> candle_core::Result<Tensor> {
     let (a, b) = (a.contiguous()?, b.contiguous()?);
     a.apply_op2_no_bwd(&b, &Op2 { name, f })
