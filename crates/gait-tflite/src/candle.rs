@@ -10,7 +10,7 @@ use crate::kernels::depthwise::Depthwise;
 use crate::kernels::eltwise::{self, Binary, Unary};
 use crate::kernels::pool::Pool;
 use crate::kernels::resize::{self, Resize};
-use crate::kernels::{act, apply1, apply2};
+use crate::kernels::{act, apply1, apply2, pad};
 use crate::model::{Activation, Graph, Op, OpOptions};
 use crate::same;
 
@@ -401,15 +401,7 @@ fn step<'a>(node: &Node, get: &dyn Fn(usize) -> R<&'a Tensor>) -> R<Tensor> {
                 })
             }
         }
-        Step::Pad(pads) => {
-            let mut y = x.clone();
-            for (d, &(a, b)) in pads.iter().enumerate() {
-                if a + b > 0 {
-                    y = y.pad_with_zeros(d, a, b).map_err(ce)?;
-                }
-            }
-            Ok(y)
-        }
+        Step::Pad(pads) => apply1(x, "pad", &|v, d| pad::pad(v, d, pads)),
         Step::Reshape(shape) => x.reshape(shape.clone()),
         Step::Concat(axis) => {
             let xs: Vec<&Tensor> = (0..node.inputs.len()).map(get).collect::<R<_>>()?;

@@ -5,6 +5,7 @@ pub(crate) mod act;
 pub(crate) mod conv;
 pub(crate) mod depthwise;
 pub(crate) mod eltwise;
+pub(crate) mod pad;
 pub(crate) mod pool;
 pub(crate) mod resize;
 #[cfg(test)]
