@@ -164,14 +164,50 @@ fn softmax_row(row: &mut [f32], scale: f32) {
     softmax_row_portable(row, scale)
 }
 
+/// The same with AVX2 intrinsics (the compiler would not vectorise `exp`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn softmax_row_avx2(row: &mut [f32], scale: f32) {
-    softmax_row_portable(row, scale)
+    use std::arch::x86_64::*;
+    let n8 = row.len() / 8 * 8;
+    let p = row.as_mut_ptr();
+    // SAFETY: every load/store below is at i + 8 <= n8 <= row.len().
+    unsafe {
+        let mut vmax = _mm256_set1_ps(f32::NEG_INFINITY);
+        for i in (0..n8).step_by(8) {
+            vmax = _mm256_max_ps(vmax, _mm256_loadu_ps(p.add(i)));
+        }
+        let mut lanes = [0f32; 8];
+        _mm256_storeu_ps(lanes.as_mut_ptr(), vmax);
+        let mx = row[n8..]
+            .iter()
+            .chain(&lanes)
+            .fold(f32::NEG_INFINITY, |a, &v| a.max(v));
+        let shift = _mm256_set1_ps(mx * scale);
+        let vscale = _mm256_set1_ps(scale);
+        let mut vsum = _mm256_setzero_ps();
+        for i in (0..n8).step_by(8) {
+            let x = _mm256_fmsub_ps(_mm256_loadu_ps(p.add(i)), vscale, shift);
+            let e = cpu::exp_avx2(x);
+            _mm256_storeu_ps(p.add(i), e);
+            vsum = _mm256_add_ps(vsum, e);
+        }
+        _mm256_storeu_ps(lanes.as_mut_ptr(), vsum);
+        let mut total: f32 = lanes.iter().sum();
+        for v in &mut row[n8..] {
+            *v = cpu::exp(*v * scale - mx * scale);
+            total += *v;
+        }
+        let inv = _mm256_set1_ps(1.0 / total);
+        for i in (0..n8).step_by(8) {
+            _mm256_storeu_ps(p.add(i), _mm256_mul_ps(_mm256_loadu_ps(p.add(i)), inv));
+        }
+        for v in &mut row[n8..] {
+            *v *= 1.0 / total;
+        }
+    }
 }
 
-/// Written as 8 independent lanes so the compiler vectorises it.
-#[inline(always)]
 fn softmax_row_portable(row: &mut [f32], scale: f32) {
     let mut max = [f32::NEG_INFINITY; 8];
     let mut chunks = row.chunks_exact(8);
@@ -186,18 +222,15 @@ fn softmax_row_portable(row: &mut [f32], scale: f32) {
         .fold(f32::NEG_INFINITY, |a, &v| a.max(v));
     mx = max.iter().fold(mx, |a, &v| a.max(v));
     let shift = mx * scale;
+    row.iter_mut()
+        .for_each(|v| *v = cpu::exp(*v * scale - shift));
     let mut sum = [0f32; 8];
-    let mut chunks = row.chunks_exact_mut(8);
-    for ch in &mut chunks {
-        for (s, v) in sum.iter_mut().zip(ch.iter_mut()) {
-            *v = cpu::exp(*v * scale - shift);
-            *s += *v;
+    let chunks = row.chunks_exact(8);
+    let mut total: f32 = chunks.remainder().iter().sum();
+    for ch in chunks {
+        for (s, &v) in sum.iter_mut().zip(ch) {
+            *s += v;
         }
-    }
-    let mut total: f32 = 0.0;
-    for v in chunks.into_remainder() {
-        *v = cpu::exp(*v * scale - shift);
-        total += *v;
     }
     total += sum.iter().sum::<f32>();
     let inv = 1.0 / total;
