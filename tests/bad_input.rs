@@ -241,20 +241,34 @@ fn every_subcommand_has_help() {
 fn cuda_device_without_a_cuda_build() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
+    // candle on a GPU needs the `cuda` feature; fails before any model loads.
+    let mut cmd = common::sample_run(&out, 150, 151);
+    for s in common::tiny_controlnet_sets() {
+        cmd.args(["--set", &s]);
+    }
     let err = fails_with(
-        gait()
-            .args([
-                "run",
-                "--no-progress",
-                "--set",
-                "run.device=cuda",
-                "--input",
-            ])
-            .arg(common::sample_video())
-            .arg("--out")
-            .arg(&out),
+        cmd.args(["--set", "run.device=cuda"]),
         &["this build has no CUDA support: rebuild with `--features cuda` (README, GPU section)"],
     );
     assert!(!err.contains("model"), "{err}");
+    assert_no_results(&out);
+
+    // The default pipeline has no stage that runs on a GPU.
+    fails_with(
+        common::sample_run(&out, 150, 151).args(["--set", "run.device=cuda:1"]),
+        &["[run]", "cuda:1", "no stage", "run.device = \"cpu\""],
+    );
+    assert_no_results(&out);
+
+    // ONNX Runtime stages ask the runtime for CUDA, which the CPU wheel lacks.
+    fails_with(
+        common::sample_run(&out, 150, 151).args([
+            "--set",
+            "run.device=cuda",
+            "--set",
+            "pose.backend=ort",
+        ]),
+        &["CUDA", "onnxruntime-gpu"],
+    );
     assert_no_results(&out);
 }

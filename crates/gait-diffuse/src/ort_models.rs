@@ -73,8 +73,8 @@ struct OnnxNet {
 }
 
 impl OnnxNet {
-    fn load(path: &Path) -> Result<Self, DiffuseError> {
-        let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(|e| match e {
+    fn load(path: &Path, device: gait_ort::Device) -> Result<Self, DiffuseError> {
+        let session = gait_ort::session(path, device).map_err(|e| match e {
             gait_ort::SessionError::Runtime(m) => DiffuseError::Ort(m),
             gait_ort::SessionError::Model(m) => DiffuseError::bad_model(path, m),
         })?;
@@ -170,6 +170,11 @@ impl OrtDenoiser {
     /// Opens `controlnet/model.onnx` and `unet/model.onnx` under `onnx_dir`
     /// and checks that the ControlNet's residuals fit the UNet's inputs.
     pub fn load(onnx_dir: &Path) -> Result<Self, DiffuseError> {
+        Self::load_on(onnx_dir, gait_ort::Device::Cpu)
+    }
+
+    /// [`OrtDenoiser::load`] with ONNX Runtime on `device`.
+    pub fn load_on(onnx_dir: &Path, device: gait_ort::Device) -> Result<Self, DiffuseError> {
         check(
             onnx_dir,
             [ONNX_CONTROLNET, ONNX_UNET]
@@ -177,8 +182,8 @@ impl OrtDenoiser {
                 .map(|f| onnx_dir.join(f))
                 .collect(),
         )?;
-        let controlnet = OnnxNet::load(&onnx_dir.join(ONNX_CONTROLNET))?;
-        let unet = OnnxNet::load(&onnx_dir.join(ONNX_UNET))?;
+        let controlnet = OnnxNet::load(&onnx_dir.join(ONNX_CONTROLNET), device)?;
+        let unet = OnnxNet::load(&onnx_dir.join(ONNX_UNET), device)?;
         let residuals = controlnet
             .outputs
             .iter()
@@ -308,17 +313,23 @@ impl OrtModels {
     /// Opens the four graphs under `onnx_dir` (layout of `tools/diffuse/export_onnx.py`);
     /// the VAE's `config.json` next to its graph gives the scaling factor.
     pub fn load(onnx_dir: &Path) -> Result<Self, DiffuseError> {
+        Self::load_on(onnx_dir, gait_ort::Device::Cpu)
+    }
+
+    /// [`OrtModels::load`] with ONNX Runtime on `device`; inputs and outputs
+    /// stay in host memory (candle CPU tensors).
+    pub fn load_on(onnx_dir: &Path, device: gait_ort::Device) -> Result<Self, DiffuseError> {
         let graphs = [ONNX_TEXT, ONNX_CONTROLNET, ONNX_UNET, ONNX_VAE];
         check(onnx_dir, graphs.iter().map(|f| onnx_dir.join(f)).collect())?;
-        let text = OnnxNet::load(&onnx_dir.join(ONNX_TEXT))?;
+        let text = OnnxNet::load(&onnx_dir.join(ONNX_TEXT), device)?;
         text.require(&["input_ids".to_string()], false)?;
-        let denoiser = OrtDenoiser::load(onnx_dir)?;
-        let vae = OnnxNet::load(&onnx_dir.join(ONNX_VAE))?;
+        let denoiser = OrtDenoiser::load_on(onnx_dir, device)?;
+        let vae = OnnxNet::load(&onnx_dir.join(ONNX_VAE), device)?;
         vae.require(&["latent_sample".to_string()], false)?;
         let vae_config: VaeConfig = read_config(&onnx_dir.join("vae_decoder"))?;
         let enc_path = onnx_dir.join(ONNX_VAE_ENCODER);
         let vae_encoder = if enc_path.is_file() {
-            let enc = OnnxNet::load(&enc_path)?;
+            let enc = OnnxNet::load(&enc_path, device)?;
             enc.require(&["sample".to_string()], false)?;
             enc.require(&["latent_mean", "latent_std"].map(String::from), true)?;
             Some(enc)

@@ -50,7 +50,16 @@ impl ControlnetPipeline {
     /// Loads the ONNX exports of `tools/diffuse/export_onnx.py` from `onnx_dir`
     /// (f32 on ONNX Runtime) with the tokenizer merges at `merges`.
     pub fn load_ort(onnx_dir: &Path, merges: &Path) -> Result<Self, DiffuseError> {
-        let models = OrtModels::load(onnx_dir)?;
+        Self::load_ort_on(onnx_dir, merges, gait_core::Device::Cpu)
+    }
+
+    /// [`ControlnetPipeline::load_ort`] with ONNX Runtime on `device`.
+    pub fn load_ort_on(
+        onnx_dir: &Path,
+        merges: &Path,
+        device: gait_core::Device,
+    ) -> Result<Self, DiffuseError> {
+        let models = OrtModels::load_on(onnx_dir, device)?;
         let tokenizer = ClipTokenizer::from_merges_file(merges)?;
         Ok(Self::from_parts(
             Box::new(models),

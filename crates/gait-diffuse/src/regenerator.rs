@@ -48,13 +48,6 @@ impl ControlnetRegenerator {
                 }
             }
             Backend::Ort => {
-                if !ctx.device.is_cpu() {
-                    // The ONNX sessions of ort_models.rs are opened on the CPU.
-                    return Err(DiffuseError::Config(format!(
-                        "regenerator.backend = \"ort\" runs on the CPU only; with [run] device = \"{}\" use backend = \"candle\"",
-                        ctx.device
-                    )));
-                }
                 let encoder = ctx
                     .model_path(&config.onnx_path)
                     .join(ort_models::ONNX_VAE_ENCODER);
@@ -76,7 +69,11 @@ impl ControlnetRegenerator {
                 }
                 let dir = ctx.model_path(&config.onnx_path);
                 ort_models::check_onnx_files(&dir)?;
-                ControlnetPipeline::load_ort(&dir, &dir.join(ort_models::ONNX_MERGES))?
+                ControlnetPipeline::load_ort_on(
+                    &dir,
+                    &dir.join(ort_models::ONNX_MERGES),
+                    ctx.device,
+                )?
             }
         };
         Self::from_pipeline(pipeline, config)

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use gait_core::{Backend, EdgeDetector, EdgeMap, Frame, StageContext, StageError};
+use gait_core::{Backend, Device, EdgeDetector, EdgeMap, Frame, StageContext, StageError};
 use image::RgbImage;
 use serde::{Deserialize, Serialize};
 
@@ -88,7 +88,7 @@ impl HedConfig {
             return Err(StageError::BadInput("edge.safe_steps must be >= 1".into()));
         }
         let path = self.weights_path(ctx);
-        let network = HedNetwork::load(self.backend, &path)
+        let network = HedNetwork::load_on(self.backend, &path, ctx.device)
             .map_err(|e| e.into_stage_error(self.backend, &path))?;
         Ok(HedDetector {
             network,
@@ -117,6 +117,9 @@ pub enum HedError {
     Format(String),
     #[error("{0}")]
     Inference(String),
+    /// `[run] device` cannot be used (e.g. CUDA in a build without it).
+    #[error(transparent)]
+    Device(StageError),
 }
 
 impl HedError {
@@ -127,6 +130,7 @@ impl HedError {
                 hint: FETCH_HINT.to_string(),
             },
             HedError::Inference(reason) => StageError::backend(backend.to_string(), reason),
+            HedError::Device(e) => e,
             other => StageError::bad_model(path, other),
         }
     }
@@ -146,12 +150,20 @@ pub struct OrtHedNet(OrtHed);
 impl HedNetwork {
     /// Loads weights: a torch checkpoint or safetensors (candle), or an ONNX export (ort).
     pub fn load(backend: Backend, path: &Path) -> Result<Self, HedError> {
+        Self::load_on(backend, path, Device::Cpu)
+    }
+
+    /// [`HedNetwork::load`] on `device` (`[run] device`).
+    pub fn load_on(backend: Backend, path: &Path, device: Device) -> Result<Self, HedError> {
         if !path.is_file() {
             return Err(HedError::Missing);
         }
         Ok(match backend {
-            Backend::Candle => Self::Candle(Box::new(CandleHedNet(CandleHed::load(path)?))),
-            Backend::Ort => Self::Ort(Box::new(OrtHedNet(OrtHed::load(path)?))),
+            Backend::Candle => {
+                let device = device.candle().map_err(HedError::Device)?;
+                Self::Candle(Box::new(CandleHedNet(CandleHed::load(path, &device)?)))
+            }
+            Backend::Ort => Self::Ort(Box::new(OrtHedNet(OrtHed::load(path, device)?))),
         })
     }
 

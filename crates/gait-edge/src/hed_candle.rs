@@ -1,5 +1,6 @@
 //! HED on candle: loads `ControlNetHED.pth` (torch pickle) or a safetensors
-//! file with the same tensor names, checks every tensor's shape, runs on CPU.
+//! file with the same tensor names, checks every tensor's shape, runs on the
+//! CPU or (CUDA builds) a GPU.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -18,19 +19,19 @@ struct Conv {
 
 /// The network with its weights, ready to run.
 pub(crate) struct CandleHed {
+    device: Device,
     norm: Tensor,
     blocks: Vec<(Vec<Conv>, Conv)>,
 }
 
 impl CandleHed {
-    pub(crate) fn load(path: &Path) -> Result<Self, HedError> {
-        let device = Device::Cpu;
+    pub(crate) fn load(path: &Path, device: &Device) -> Result<Self, HedError> {
         let bad = |e: candle_core::Error| HedError::Format(e.to_string());
         let is_safetensors = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("safetensors"));
         let tensors: HashMap<String, Tensor> = if is_safetensors {
-            candle_core::safetensors::load(path, &device).map_err(bad)?
+            candle_core::safetensors::load(path, device).map_err(bad)?
         } else {
             candle_core::pickle::read_all(path)
                 .map_err(bad)?
@@ -50,7 +51,12 @@ impl CandleHed {
                     found: t.dims().to_vec(),
                 });
             }
-            checked.insert(name, t.to_dtype(DType::F32).map_err(bad)?);
+            checked.insert(
+                name,
+                t.to_dtype(DType::F32)
+                    .and_then(|t| t.to_device(device))
+                    .map_err(bad)?,
+            );
         }
         let take = |name: &str| checked[name].clone();
         let conv = |name: String| -> Result<Conv, HedError> {
@@ -69,6 +75,7 @@ impl CandleHed {
             blocks.push((convs, conv(projection_name(b))?));
         }
         Ok(Self {
+            device: device.clone(),
             norm: take(NORM),
             blocks,
         })
@@ -82,7 +89,7 @@ impl CandleHed {
         w: usize,
     ) -> Result<Vec<SideOutput>, HedError> {
         let run = || -> candle_core::Result<Vec<SideOutput>> {
-            let x = Tensor::from_vec(chw, (1, 3, h, w), &Device::Cpu)?;
+            let x = Tensor::from_vec(chw, (1, 3, h, w), &self.device)?;
             let mut x = x.broadcast_sub(&self.norm)?;
             let mut sides = Vec::with_capacity(self.blocks.len());
             for (b, (convs, projection)) in self.blocks.iter().enumerate() {

@@ -15,8 +15,8 @@ pub(crate) struct OrtHed {
 }
 
 impl OrtHed {
-    pub(crate) fn load(path: &Path) -> Result<Self, HedError> {
-        let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(|e| match e {
+    pub(crate) fn load(path: &Path, device: gait_ort::Device) -> Result<Self, HedError> {
+        let session = gait_ort::session(path, device).map_err(|e| match e {
             gait_ort::SessionError::Runtime(m) => HedError::Inference(m),
             gait_ort::SessionError::Model(m) => HedError::Format(m),
         })?;

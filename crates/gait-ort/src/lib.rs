@@ -12,15 +12,10 @@ use std::sync::OnceLock;
 pub use ort::environment::Environment;
 pub use ort::session::Session;
 
-/// Where ONNX Runtime runs a model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Device {
-    #[default]
-    Cpu,
-    /// The CUDA execution provider on GPU `ordinal`; needs an ONNX Runtime
-    /// library built with CUDA (the `onnxruntime-gpu` wheel's, not `onnxruntime`'s).
-    Cuda(u32),
-}
+/// Where ONNX Runtime runs a model (`[run] device`). CUDA needs an ONNX
+/// Runtime library built with it (the `onnxruntime-gpu` wheel's, not
+/// `onnxruntime`'s).
+pub use gait_core::Device;
 
 /// Opens the ONNX file `path` in the shared environment, on `device`, with
 /// one intra-op thread per core and no busy-waiting workers.

@@ -19,8 +19,8 @@ pub fn export_edges(
     progress: bool,
 ) -> Result<usize, PipelineError> {
     let info = InputInfo::open(input)?;
-    crate::runner::cuda_check(config.run.device)?;
-    let ctx = StageContext::new(models_dir).on(config.run.device);
+    crate::registry::check_devices(config)?;
+    let ctx = StageContext::new(models_dir).on(crate::registry::stage_devices(config)[0]);
     let mut detector = config.edge.build(&ctx)?.ok_or_else(|| {
         PipelineError::config("[edge]", "kind is \"none\": there are no edge maps to write; set edge.kind (e.g. --set edge.kind=canny)")
     })?;

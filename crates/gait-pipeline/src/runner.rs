@@ -68,7 +68,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         .map_or(0, |d| d.as_secs());
     let info = InputInfo::open(&opts.input)?;
     let fps = config.input.fps.unwrap_or(info.fps);
-    cuda_check(config.run.device)?;
+    registry::check_devices(config)?;
     let ctx = StageContext::new(&opts.models_dir).on(config.run.device);
     let mut stages = registry::build(config, &ctx)?;
     let names = stages.pose.keypoint_names();
@@ -377,15 +377,6 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     summary.write_manifest(&opts.out)?;
     summary.kinematics = Some(kin);
     Ok(summary)
-}
-
-/// A GPU run needs a CUDA build; fails before any stage loads a model.
-pub(crate) fn cuda_check(device: Device) -> Result<(), PipelineError> {
-    if device.is_cpu() || cfg!(feature = "cuda") {
-        Ok(())
-    } else {
-        Err(gait_core::StageError::from(gait_core::NoCudaSupport).into())
-    }
 }
 
 /// The stage name that salts a cache key: plain on the CPU (keys of CPU runs

@@ -307,11 +307,11 @@ fn ort_coco18_matches_controlnet_aux() {
 fn ort_body25_caffe_style_output_matches_torch() {
     require_ort();
     let (_tmp, onnx) = rebuild_onnx("body25", "body25_manifest.json");
-    let mut model = OrtNet::load(&onnx, OpenposeModel::Body25).unwrap();
+    let mut model = OrtNet::load(&onnx, OpenposeModel::Body25, gait_core::Device::Cpu).unwrap();
     assert_eq!(model.model(), OpenposeModel::Body25);
     check(&model.run(&input()).unwrap(), "body25");
     // The same file configured as COCO-18: 78 channels are not 19 + 38.
-    let mut wrong = OrtNet::load(&onnx, OpenposeModel::Coco18).unwrap();
+    let mut wrong = OrtNet::load(&onnx, OpenposeModel::Coco18, gait_core::Device::Cpu).unwrap();
     let e = wrong.run(&input()).err().unwrap().to_string();
     assert!(e.contains("78") && e.contains("57"), "{e}");
 }

@@ -48,8 +48,8 @@ impl Blazepose {
     pub fn new(config: &BlazeposeConfig, ctx: &StageContext) -> Result<Self, StageError> {
         let files = config.tflite_files(ctx);
         Ok(Self {
-            detector: net::load(&files[0], config.backend)?,
-            landmarker: net::load(&files[1], config.backend)?,
+            detector: net::load(&files[0], config.backend, ctx.device)?,
+            landmarker: net::load(&files[1], config.backend, ctx.device)?,
             anchors: anchors(),
             config: config.clone(),
             track: None,

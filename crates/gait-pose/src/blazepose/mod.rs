@@ -31,7 +31,7 @@ pub fn raw_outputs(
     backend: Backend,
     input: &[f32],
 ) -> Result<Vec<Vec<f32>>, StageError> {
-    net::load(model, backend)?.run(input)
+    net::load(model, backend, gait_core::Device::Cpu)?.run(input)
 }
 
 /// Keys of `[pose]` when `kind = "blazepose"`.

@@ -33,8 +33,14 @@ fn missing(path: &Path) -> StageError {
     }
 }
 
-/// Loads the `.tflite` file at `path` for `backend`.
-pub(crate) fn load(path: &Path, backend: Backend) -> Result<Box<dyn Net>, StageError> {
+/// Loads the `.tflite` file at `path` for `backend`. ONNX Runtime runs it on
+/// `device`; candle always on the CPU (gait-tflite's kernels are CPU code,
+/// and the two small networks are not worth a GPU round trip per frame).
+pub(crate) fn load(
+    path: &Path,
+    backend: Backend,
+    device: gait_core::Device,
+) -> Result<Box<dyn Net>, StageError> {
     if !path.is_file() {
         return Err(missing(path));
     }
@@ -44,7 +50,7 @@ pub(crate) fn load(path: &Path, backend: Backend) -> Result<Box<dyn Net>, StageE
             let graph = CandleGraph::new(&graph).map_err(|e| StageError::bad_model(path, e))?;
             Ok(Box::new(CandleNet { graph }))
         }
-        Backend::Ort => super::ort_net::load(path, &graph),
+        Backend::Ort => super::ort_net::load(path, &graph, device),
     }
 }
 

@@ -33,7 +33,11 @@ impl Net for OrtNet {
 }
 
 /// Opens the ONNX file next to the `.tflite` file `tflite` (parsed as `graph`).
-pub(crate) fn load(tflite: &Path, graph: &Graph) -> Result<Box<dyn Net>, StageError> {
+pub(crate) fn load(
+    tflite: &Path,
+    graph: &Graph,
+    device: gait_ort::Device,
+) -> Result<Box<dyn Net>, StageError> {
     let onnx = onnx_path(tflite);
     if !onnx.is_file() {
         return Err(StageError::MissingModel {
@@ -41,7 +45,7 @@ pub(crate) fn load(tflite: &Path, graph: &Graph) -> Result<Box<dyn Net>, StageEr
             hint: "run `gait models fetch blazepose` (it also writes the ONNX exports)".into(),
         });
     }
-    let session = gait_ort::session(&onnx, gait_ort::Device::Cpu).map_err(|e| match e {
+    let session = gait_ort::session(&onnx, device).map_err(|e| match e {
         gait_ort::SessionError::Runtime(m) => err(m),
         gait_ort::SessionError::Model(m) => StageError::bad_model(&onnx, m),
     })?;

@@ -21,7 +21,7 @@ impl Openpose {
     pub fn new(config: &OpenposeConfig, ctx: &StageContext) -> Result<Self, StageError> {
         let path = config.weights(ctx);
         Ok(Self {
-            net: net::load(&path, config.model, config.backend)?,
+            net: net::load_on(&path, config.model, config.backend, ctx.device)?,
             config: config.clone(),
             last_centre: None,
         })

@@ -121,6 +121,8 @@ enum Layer {
 
 /// The COCO-18 network on candle (CPU).
 pub struct CandleNet {
+    /// Where the weights live; inputs go there too.
+    device: Device,
     front: Vec<Layer>,
     /// Stages 1..=6, each (PAF branch, heatmap branch).
     stages: Vec<(Vec<Layer>, Vec<Layer>)>,
@@ -131,6 +133,10 @@ impl CandleNet {
     /// [`coco18_layout`]); every tensor must be there with its shape, and
     /// nothing else.
     pub fn from_tensors(mut tensors: HashMap<String, Tensor>) -> Result<Self, WeightsError> {
+        let device = tensors
+            .values()
+            .next()
+            .map_or(Device::Cpu, |t| t.device().clone());
         let mut take = |c: &ConvSpec| -> Result<Layer, WeightsError> {
             let w = take_tensor(
                 &mut tensors,
@@ -163,7 +169,11 @@ impl CandleNet {
             extra.sort();
             return Err(WeightsError::Unknown(extra));
         }
-        Ok(Self { front, stages })
+        Ok(Self {
+            device,
+            front,
+            stages,
+        })
     }
 
     fn forward(&self, x: &Tensor) -> candle_core::Result<(Tensor, Tensor)> {
@@ -237,7 +247,7 @@ impl OpenposeNet for CandleNet {
             )));
         }
         let err = |e: candle_core::Error| StageError::backend("candle", e);
-        let x = Tensor::from_slice(&input.data, (1, 3, h, w), &Device::Cpu).map_err(err)?;
+        let x = Tensor::from_slice(&input.data, (1, 3, h, w), &self.device).map_err(err)?;
         let (paf, heat) = self.forward(&x).map_err(err)?;
         let flat = |t: &Tensor| t.flatten_all().and_then(|t| t.to_vec1::<f32>());
         let (oh, ow) = (

@@ -38,8 +38,18 @@ pub fn load(
     model: OpenposeModel,
     backend: Backend,
 ) -> Result<Box<dyn OpenposeNet>, StageError> {
+    load_on(path, model, backend, gait_core::Device::Cpu)
+}
+
+/// [`load`] on `device` (`[run] device`).
+pub fn load_on(
+    path: &Path,
+    model: OpenposeModel,
+    backend: Backend,
+    device: gait_core::Device,
+) -> Result<Box<dyn OpenposeNet>, StageError> {
     match backend {
-        Backend::Ort => Ok(Box::new(OrtNet::load(path, model)?)),
+        Backend::Ort => Ok(Box::new(OrtNet::load(path, model, device)?)),
         Backend::Candle => {
             if model != OpenposeModel::Coco18 {
                 return Err(StageError::BadInput(format!(
@@ -55,8 +65,13 @@ pub fn load(
                             .into(),
                 });
             }
-            let tensors =
-                checkpoint::read_tensors(path).map_err(|e| StageError::bad_model(path, e))?;
+            let device = device.candle()?;
+            let tensors = checkpoint::read_tensors(path)
+                .map_err(|e| StageError::bad_model(path, e))?
+                .into_iter()
+                .map(|(name, t)| Ok((name, t.to_device(&device)?)))
+                .collect::<candle_core::Result<HashMap<_, _>>>()
+                .map_err(|e| StageError::backend("candle", e))?;
             let net =
                 CandleNet::from_tensors(tensors).map_err(|e| StageError::bad_model(path, e))?;
             Ok(Box::new(net))

@@ -33,7 +33,11 @@ pub struct OrtNet {
 
 impl OrtNet {
     /// Opens `path` (an ONNX file, external data next to it) for `model`.
-    pub fn load(path: &Path, model: OpenposeModel) -> Result<Self, StageError> {
+    pub fn load(
+        path: &Path,
+        model: OpenposeModel,
+        device: gait_ort::Device,
+    ) -> Result<Self, StageError> {
         if !path.is_file() {
             return Err(StageError::MissingModel {
                 path: path.to_path_buf(),
@@ -44,7 +48,7 @@ impl OrtNet {
                 .into(),
             });
         }
-        let session = gait_ort::session(path, gait_ort::Device::Cpu).map_err(|e| match e {
+        let session = gait_ort::session(path, device).map_err(|e| match e {
             gait_ort::SessionError::Runtime(m) => err(m),
             gait_ort::SessionError::Model(m) => StageError::bad_model(path, m),
         })?;
