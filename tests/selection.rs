@@ -125,6 +125,23 @@ fn judge(csv: &Csv, min_likelihood: f64) -> BTreeMap<usize, Option<&'static str>
     verdict
 }
 
+/// A likelihood threshold between the `below`-th and the next frame's weakest
+/// lower-limb likelihood, so that some frames are poor and some good.
+fn splitting_threshold(csv: &Csv, below: usize) -> f64 {
+    let mut weakest: Vec<f64> = csv
+        .frames()
+        .iter()
+        .map(|&f| {
+            LOWER
+                .iter()
+                .map(|n| csv.point(f, n)[2])
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    weakest.sort_by(f64::total_cmp);
+    (weakest[below - 1] + weakest[below]) / 2.0
+}
+
 /// Inclusive ranges of run.json as a set of frames.
 fn frames_of(ranges: &serde_json::Value) -> BTreeSet<usize> {
     ranges
@@ -164,20 +181,7 @@ fn poor_frames_are_regenerated_and_good_frames_keep_their_pose() {
     run_ok(&mut run_args(&plain, first, last, &[]));
     let original = Csv::read(&plain.join("keypoints.csv"));
 
-    // A threshold between the frames' weakest lower-limb likelihoods, so
-    // that some frames are poor and some good.
-    let mut weakest: Vec<f64> = original
-        .frames()
-        .iter()
-        .map(|&f| {
-            LOWER
-                .iter()
-                .map(|n| original.point(f, n)[2])
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    weakest.sort_by(f64::total_cmp);
-    let threshold = (weakest[4] + weakest[5]) / 2.0;
+    let threshold = splitting_threshold(&original, 5);
     let threshold_set = format!("selection.min_likelihood={threshold}");
     let sets = ["selection.mode=poor", threshold_set.as_str()];
 
@@ -403,18 +407,7 @@ fn only_poor_frames_go_through_the_controlnet() {
     let plain = dir.path().join("plain");
     run_ok(&mut run_args(&plain, first, last, &[]));
     let original = Csv::read(&plain.join("keypoints.csv"));
-    let mut weakest: Vec<f64> = original
-        .frames()
-        .iter()
-        .map(|&f| {
-            LOWER
-                .iter()
-                .map(|n| original.point(f, n)[2])
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    weakest.sort_by(f64::total_cmp);
-    let threshold = (weakest[2] + weakest[3]) / 2.0;
+    let threshold = splitting_threshold(&original, 3);
 
     let cache = dir.path().join("cache");
     let mut sets = common::tiny_controlnet_sets();
