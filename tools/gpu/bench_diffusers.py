@@ -190,7 +190,8 @@ def report(args):
     if not runs:
         raise SystemExit(f"{args.jsonl}: no benchmark results")
     print(f"### ControlNet regeneration on the GPU ({meta.get('date', '?')}, {meta.get('gpu', '?')})\n")
-    print(f"Random SD 1.5-size weights (seed 0), {runs[0]['size']}x{runs[0]['size']}, {runs[0]['steps']} UniPC steps, "
+    weights = "Tiny random weights (the tests' configs; times mean nothing)" if meta.get("tiny") else "Random SD 1.5-size weights"
+    print(f"{weights} (seed 0), {runs[0]['size']}x{runs[0]['size']}, {runs[0]['steps']} UniPC steps, "
           f"guidance 7.5 (batch 2 through UNet + ControlNet), the paper's prompts; per-frame seconds, "
           f"median over every timed frame of {meta.get('rounds', '?')} interleaved rounds "
           f"(torch {next((r['torch'] for r in runs if 'torch' in r), '?')}, "

@@ -60,7 +60,7 @@ EOF
 else
     gpu="none (dry run on $(nproc) CPU cores)"
 fi
-echo "{\"gpu\": \"$gpu\", \"date\": \"$(date -u +%F)\", \"rounds\": $rounds}" >>"$results"
+echo "{\"gpu\": \"$gpu\", \"date\": \"$(date -u +%F)\", \"rounds\": $rounds, \"tiny\": $([ -n "$tiny" ] && echo true || echo false)}" >>"$results"
 
 t=$(date +%s)
 $bench prepare "$work" $tiny --frames "$e2e_frames" --size "$size"
