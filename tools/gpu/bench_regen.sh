@@ -41,6 +41,17 @@ if ! $python -c 'import diffusers' 2>/dev/null; then
     $python -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target "$work/site" "$root"/.whl/*.whl
     export PYTHONPATH=$work/site${PYTHONPATH:+:$PYTHONPATH}
 fi
+# The carried binaries travel xz-compressed (tools/gpu/README.md).
+for exe in gait regen_bench; do
+    if [ ! -x "$bin/$exe" ] && [ -f "$bin/$exe.xz" ]; then
+        mkdir -p "$work/bin"
+        # Python's lzma, since the machine may lack the xz command.
+        $python -c 'import lzma, shutil, sys; shutil.copyfileobj(lzma.open(sys.argv[1]), open(sys.argv[2], "wb"))' \
+            "$bin/$exe.xz" "$work/bin/$exe"
+        chmod +x "$work/bin/$exe"
+    fi
+done
+[ -x "$bin/gait" ] || bin=$work/bin
 if [ "$device" = cuda ]; then
     # Our binaries link libcublas/libcublasLt/libcudart/libnvrtc (.so.13) and libcurand
     # (.so.10): torch's CUDA wheels have them, and so may the toolkit.

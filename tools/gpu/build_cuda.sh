@@ -61,6 +61,8 @@ export CUDA_COMPUTE_CAP=${CUDA_COMPUTE_CAP:-90}
 export CARGO_TARGET_DIR=$target
 nvcc --version | tail -2
 cd "$root"
-cargo build --release --locked -p gait-cli --features cuda
-cargo build --release --locked -p gait-diffuse --features cuda --example regen_bench
+# One invocation, so both get the same features and candle's CUDA kernels (about an hour on
+# 2 cores, most of it candle's quantized matmul kernels) are compiled once.
+cargo build --release --locked -p gait-cli -p gait-diffuse --features gait-cli/cuda,gait-diffuse/cuda \
+    --bin gait --example regen_bench
 ls -l "$target/release/gait" "$target/release/examples/regen_bench"

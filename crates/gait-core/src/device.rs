@@ -29,8 +29,18 @@ impl Device {
             Device::Cuda(_) if !candle_core::utils::cuda_is_available() => {
                 Err(NoCudaSupport.into())
             }
-            Device::Cuda(n) => candle_core::Device::new_cuda(n as usize)
-                .map_err(|e| crate::StageError::backend("candle", format!("CUDA device {n}: {e}"))),
+            Device::Cuda(n) => candle_core::Device::new_cuda(n as usize).map_err(|e| {
+                // candle appends a multi-line backtrace when one was captured;
+                // the message stays one line.
+                let e = match e {
+                    candle_core::Error::WithBacktrace { inner, .. } => *inner,
+                    e => e,
+                };
+                crate::StageError::backend(
+                    "candle",
+                    format!("cannot use CUDA device {n} ({e}); check the GPU and its driver with nvidia-smi"),
+                )
+            }),
         }
     }
 }
