@@ -7,19 +7,6 @@ use std::path::Path;
 use gait_core::{EdgeMap, Frame, ImageRegenerator, Resize};
 use gait_diffuse::{ControlnetConfig, ControlnetPipeline, ControlnetRegenerator, SchedulerKind};
 
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for entry in std::fs::read_dir(from).unwrap() {
-        let entry = entry.unwrap();
-        let target = to.join(entry.file_name());
-        if entry.file_type().unwrap().is_dir() {
-            copy_dir(&entry.path(), &target);
-        } else {
-            std::fs::copy(entry.path(), target).unwrap();
-        }
-    }
-}
-
 fn edit_json(path: &Path, key: &str, value: serde_json::Value) {
     let mut v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
@@ -37,7 +24,7 @@ fn load_err(sd: &Path, cn: &Path) -> String {
 #[test]
 fn wrong_unet_checkpoint_names_file_and_tensor() {
     let dir = tempfile::tempdir().unwrap();
-    copy_dir(&common::tiny(), dir.path());
+    common::copy_dir(&common::tiny(), dir.path());
     // An SD 2.x-like UNet config against these weights: the text width differs.
     edit_json(
         &dir.path().join("unet/config.json"),
@@ -60,7 +47,7 @@ fn wrong_unet_checkpoint_names_file_and_tensor() {
 #[test]
 fn mismatched_controlnet_is_rejected_with_its_file() {
     let dir = tempfile::tempdir().unwrap();
-    copy_dir(&common::tiny(), dir.path());
+    common::copy_dir(&common::tiny(), dir.path());
     edit_json(
         &dir.path().join("controlnet/config.json"),
         "cross_attention_dim",
@@ -76,7 +63,7 @@ fn mismatched_controlnet_is_rejected_with_its_file() {
 #[test]
 fn a_unet_file_given_as_controlnet_names_the_missing_tensor() {
     let dir = tempfile::tempdir().unwrap();
-    copy_dir(&common::tiny(), dir.path());
+    common::copy_dir(&common::tiny(), dir.path());
     std::fs::copy(
         dir.path().join("unet/diffusion_pytorch_model.safetensors"),
         dir.path()

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use candle_core::{DType, Device, Tensor};
 
@@ -53,6 +53,20 @@ pub fn assert_close(name: &str, ours: &Tensor, reference: &Tensor, tol: f64) {
 }
 
 /// The ONNX exports of the tiny models (tools/diffuse/export_onnx.py).
+/// Copies a folder tree (fixture models to edit in a temporary folder).
+pub fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_dir(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), target).unwrap();
+        }
+    }
+}
+
 pub fn tiny_onnx() -> PathBuf {
     fixtures().join("tiny_onnx")
 }
@@ -142,4 +156,68 @@ pub fn paper_context(pipe: &gait_diffuse::ControlnetPipeline) -> Tensor {
         7.5,
     )
     .unwrap()
+}
+
+/// Image-to-image (DDIM, UniPC at strength 0.75) and inpainting (both at
+/// 0.75, UniPC at 1.0) against diffusers' pipelines (modes fixture), from the
+/// preprocessed frame `init` (1x3xHxW in [-1, 1]).
+pub fn check_modes(label: &str, pipe: &gait_diffuse::ControlnetPipeline, init: &Tensor, tol: f64) {
+    use gait_diffuse::SchedulerKind;
+    let e = modes();
+    let ctx = paper_context(pipe);
+    let (control, mask) = (modes_control(&e), modes_mask(&e));
+    for (name, kind) in [
+        ("ddim", SchedulerKind::Ddim),
+        ("unipc", SchedulerKind::Unipc),
+    ] {
+        let img = pipe
+            .img2img(
+                &ctx,
+                &control,
+                init,
+                &e["modes.enc_eps"],
+                &e["modes.noise"],
+                0.75,
+                &modes_params(kind),
+            )
+            .unwrap();
+        let key = format!("modes.img2img.{name}.image");
+        assert_close(&format!("{label}img2img {name}"), &img, &e[&key], tol);
+    }
+    let inpaint = [
+        (
+            "ddim",
+            SchedulerKind::Ddim,
+            0.75,
+            "modes.inpaint.ddim.image",
+        ),
+        (
+            "unipc",
+            SchedulerKind::Unipc,
+            0.75,
+            "modes.inpaint.unipc.image",
+        ),
+        (
+            "unipc",
+            SchedulerKind::Unipc,
+            1.0,
+            "modes.inpaint_full.unipc.image",
+        ),
+    ];
+    for (name, kind, strength, key) in inpaint {
+        let img = pipe
+            .inpaint(
+                &ctx,
+                &control,
+                init,
+                &mask,
+                &e["modes.enc_eps"],
+                &e["modes.noise"],
+                strength,
+                &modes_params(kind),
+            )
+            .unwrap();
+        let what = format!("{label}inpaint {name} strength {strength}");
+        assert_close(&what, &img, &e[key], tol);
+    }
 }

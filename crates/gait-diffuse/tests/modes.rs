@@ -36,11 +36,6 @@ fn init_image(e: &HashMap<String, Tensor>) -> Tensor {
     ((hwc.permute((2, 0, 1)).unwrap().unsqueeze(0).unwrap() * 2.0).unwrap() - 1.0).unwrap()
 }
 
-const SCHEDULERS: [(&str, SchedulerKind); 2] = [
-    ("ddim", SchedulerKind::Ddim),
-    ("unipc", SchedulerKind::Unipc),
-];
-
 #[test]
 fn vae_encoder_matches_diffusers_latent_dist() {
     let e = modes();
@@ -62,72 +57,8 @@ fn vae_encoder_matches_diffusers_latent_dist() {
 }
 
 #[test]
-fn img2img_matches_diffusers() {
-    let e = modes();
-    let pipe = pipeline();
-    let ctx = paper_context(&pipe);
-    for (name, kind) in SCHEDULERS {
-        let img = pipe
-            .img2img(
-                &ctx,
-                &modes_control(&e),
-                &init_image(&e),
-                &e["modes.enc_eps"],
-                &e["modes.noise"],
-                0.75,
-                &modes_params(kind),
-            )
-            .unwrap();
-        assert_close(
-            &format!("img2img {name}"),
-            &img,
-            &e[&format!("modes.img2img.{name}.image")],
-            TOL,
-        );
-    }
-}
-
-#[test]
-fn inpaint_matches_diffusers() {
-    let e = modes();
-    let pipe = pipeline();
-    let ctx = paper_context(&pipe);
-    let mask = modes_mask(&e);
-    let cases = [
-        (
-            "ddim",
-            SchedulerKind::Ddim,
-            0.75,
-            "modes.inpaint.ddim.image",
-        ),
-        (
-            "unipc",
-            SchedulerKind::Unipc,
-            0.75,
-            "modes.inpaint.unipc.image",
-        ),
-        (
-            "unipc strength 1",
-            SchedulerKind::Unipc,
-            1.0,
-            "modes.inpaint_full.unipc.image",
-        ),
-    ];
-    for (name, kind, strength, key) in cases {
-        let img = pipe
-            .inpaint(
-                &ctx,
-                &modes_control(&e),
-                &init_image(&e),
-                &mask,
-                &e["modes.enc_eps"],
-                &e["modes.noise"],
-                strength,
-                &modes_params(kind),
-            )
-            .unwrap();
-        assert_close(&format!("inpaint {name}"), &img, &e[key], TOL);
-    }
+fn img2img_and_inpaint_match_diffusers() {
+    common::check_modes("", &pipeline(), &init_image(&modes()), TOL);
 }
 
 fn config(toml: &str) -> ControlnetConfig {

@@ -4,11 +4,8 @@
 
 mod common;
 
-use common::{
-    assert_close, modes, modes_control, modes_mask, modes_params, paper_context, require_ort, tiny,
-    tiny_onnx,
-};
-use gait_diffuse::{ControlnetPipeline, SchedulerKind};
+use common::{assert_close, modes, require_ort, tiny, tiny_onnx};
+use gait_diffuse::ControlnetPipeline;
 
 const TOL: f64 = 1e-4;
 
@@ -27,71 +24,7 @@ fn ort_vae_encoder_matches_diffusers() {
 
 #[test]
 fn ort_img2img_and_inpaint_match_diffusers() {
-    let e = modes();
-    let pipe = pipeline();
-    let ctx = paper_context(&pipe);
-    let mask = modes_mask(&e);
-    for (name, kind) in [
-        ("ddim", SchedulerKind::Ddim),
-        ("unipc", SchedulerKind::Unipc),
-    ] {
-        let img = pipe
-            .img2img(
-                &ctx,
-                &modes_control(&e),
-                &e["modes.init"],
-                &e["modes.enc_eps"],
-                &e["modes.noise"],
-                0.75,
-                &modes_params(kind),
-            )
-            .unwrap();
-        assert_close(
-            &format!("ort img2img {name}"),
-            &img,
-            &e[&format!("modes.img2img.{name}.image")],
-            TOL,
-        );
-        for (strength, key) in [
-            (0.75, format!("modes.inpaint.{name}.image")),
-            (1.0, "modes.inpaint_full.unipc.image".to_string()),
-        ] {
-            if strength == 1.0 && kind != SchedulerKind::Unipc {
-                continue;
-            }
-            let img = pipe
-                .inpaint(
-                    &ctx,
-                    &modes_control(&e),
-                    &e["modes.init"],
-                    &mask,
-                    &e["modes.enc_eps"],
-                    &e["modes.noise"],
-                    strength,
-                    &modes_params(kind),
-                )
-                .unwrap();
-            assert_close(
-                &format!("ort inpaint {name} strength {strength}"),
-                &img,
-                &e[&key],
-                TOL,
-            );
-        }
-    }
-}
-
-fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for entry in std::fs::read_dir(from).unwrap() {
-        let entry = entry.unwrap();
-        let target = to.join(entry.file_name());
-        if entry.file_type().unwrap().is_dir() {
-            copy_dir(&entry.path(), &target);
-        } else {
-            std::fs::copy(entry.path(), target).unwrap();
-        }
-    }
+    common::check_modes("ort ", &pipeline(), &modes()["modes.init"], TOL);
 }
 
 /// The whole regenerator in inpaint mode on ort and on candle, from one
@@ -103,10 +36,10 @@ fn inpainting_regenerator_on_ort_matches_candle() {
 
     require_ort();
     let dir = tempfile::tempdir().unwrap();
-    copy_dir(&tiny(), &dir.path().join("sd"));
+    common::copy_dir(&tiny(), &dir.path().join("sd"));
     let onnx = dir.path().join("onnx/sd15-controlnet-canny");
-    copy_dir(&tiny_onnx(), &onnx);
-    copy_dir(&tiny().join("tokenizer"), &onnx.join("tokenizer"));
+    common::copy_dir(&tiny_onnx(), &onnx);
+    common::copy_dir(&tiny().join("tokenizer"), &onnx.join("tokenizer"));
     let ctx = gait_core::StageContext::new(dir.path());
     let config = |backend: &str| {
         let toml = format!(
