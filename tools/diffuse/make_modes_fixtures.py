@@ -52,19 +52,12 @@ from PIL import Image
 from safetensors.torch import save_file
 from transformers import CLIPTextModel
 
+# SD 1.5's scheduler config (this script runs from its own folder, so the sibling imports).
+from make_fixtures import SCHED_KW
+
 FIX = os.path.join(os.path.dirname(__file__), "..", "..", "crates", "gait-diffuse", "tests", "fixtures")
 TINY = os.path.join(FIX, "tiny")
 STEPS, STRENGTH, GUIDANCE, COND_SCALE = 3, 0.75, 7.5, 0.8
-# SD 1.5's scheduler config, as in make_fixtures.py.
-SCHED_KW = dict(
-    beta_start=0.00085,
-    beta_end=0.012,
-    beta_schedule="scaled_linear",
-    num_train_timesteps=1000,
-    clip_sample=False,
-    set_alpha_to_one=False,
-    steps_offset=1,
-)
 
 
 def fixed(t, what):
