@@ -100,7 +100,7 @@ fn regenerator_on_ort_matches_candle_frames() {
     require_ort();
     let dir = models_dir();
     // The candle side reads the diffusers-layout fixtures from `sd`.
-    common_copy(&tiny(), &dir.path().join("sd"));
+    common::copy_dir(&tiny(), &dir.path().join("sd"));
     let ctx = StageContext::new(dir.path());
     let frames: Vec<Frame> = (0..3)
         .map(|i| Frame::new(4 + i, image::RgbImage::new(80, 60)))
@@ -134,19 +134,6 @@ fn regenerator_on_ort_matches_candle_frames() {
         assert!(d <= 1, "ort and candle frames differ by {d} levels");
     }
     assert_ne!(a[0].image, a[1].image, "per-frame seeds differ on ort");
-}
-
-fn common_copy(from: &std::path::Path, to: &std::path::Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for entry in std::fs::read_dir(from).unwrap() {
-        let entry = entry.unwrap();
-        let target = to.join(entry.file_name());
-        if entry.file_type().unwrap().is_dir() {
-            common_copy(&entry.path(), &target);
-        } else {
-            std::fs::copy(entry.path(), target).unwrap();
-        }
-    }
 }
 
 #[test]
