@@ -38,6 +38,21 @@ pub const LOWER_LIMB: [&str; 10] = [
     "right_toe",
 ];
 
+/// The segments joining [`LOWER_LIMB`]'s keypoints, leg by leg (thigh, shank,
+/// and the foot's triangle): what leg masks and skeleton plots draw.
+pub const LEG_SEGMENTS: [(&str, &str); 10] = [
+    ("left_hip", "left_knee"),
+    ("left_knee", "left_ankle"),
+    ("left_ankle", "left_heel"),
+    ("left_ankle", "left_toe"),
+    ("left_heel", "left_toe"),
+    ("right_hip", "right_knee"),
+    ("right_knee", "right_ankle"),
+    ("right_ankle", "right_heel"),
+    ("right_ankle", "right_toe"),
+    ("right_heel", "right_toe"),
+];
+
 /// A 2-D keypoint in pixel coordinates (x right, y down, the centre of pixel
 /// (i, j) at (i, j)) with the model's likelihood in [0, 1].
 ///

@@ -51,20 +51,6 @@ impl LegMaskConfig {
     }
 }
 
-/// Segments of each leg, by canonical keypoint name.
-const SEGMENTS: [(&str, &str); 10] = [
-    ("left_hip", "left_knee"),
-    ("left_knee", "left_ankle"),
-    ("left_ankle", "left_heel"),
-    ("left_ankle", "left_toe"),
-    ("left_heel", "left_toe"),
-    ("right_hip", "right_knee"),
-    ("right_knee", "right_ankle"),
-    ("right_ankle", "right_heel"),
-    ("right_ankle", "right_toe"),
-    ("right_heel", "right_toe"),
-];
-
 /// The legs of one pose as capsules in frame pixels.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LegMask {
@@ -84,7 +70,7 @@ impl LegMask {
                 && k.y.is_finite())
             .then_some((k.x, k.y))
         };
-        let segments: Vec<[(f64, f64); 2]> = SEGMENTS
+        let segments: Vec<[(f64, f64); 2]> = gait_core::keypoint::LEG_SEGMENTS
             .iter()
             .filter_map(|(a, b)| Some([point(a)?, point(b)?]))
             .collect();

@@ -29,24 +29,15 @@ impl Default for StripOptions {
     }
 }
 
-/// Segments drawn, by canonical name.
-const BONES: [(&str, &str); 16] = [
+/// Segments drawn above the legs, by canonical name (the legs: gait-core's
+/// `LEG_SEGMENTS`).
+const UPPER_BONES: [(&str, &str); 6] = [
     ("nose", "neck"),
     ("neck", "left_shoulder"),
     ("neck", "right_shoulder"),
     ("neck", "mid_hip"),
     ("mid_hip", "left_hip"),
     ("mid_hip", "right_hip"),
-    ("left_hip", "left_knee"),
-    ("left_knee", "left_ankle"),
-    ("left_ankle", "left_heel"),
-    ("left_ankle", "left_toe"),
-    ("left_heel", "left_toe"),
-    ("right_hip", "right_knee"),
-    ("right_knee", "right_ankle"),
-    ("right_ankle", "right_heel"),
-    ("right_ankle", "right_toe"),
-    ("right_heel", "right_toe"),
 ];
 
 /// One panel: where it sits and how image coordinates map into it.
@@ -86,7 +77,7 @@ impl Draw for Strip {
                     ((y - p.origin.1) * p.scale).round() as i32,
                 )
             };
-            for (a, b) in BONES {
+            for &(a, b) in UPPER_BONES.iter().chain(&gait_core::keypoint::LEG_SEGMENTS) {
                 if let (Some(&pa), Some(&pb)) = (p.points.get(a), p.points.get(b)) {
                     let c = if colour(a) == colour(b) {
                         colour(a)
