@@ -13,6 +13,11 @@ The tiny test fixtures are regenerated with
     python tools/diffuse/export_onnx.py --sd crates/gait-diffuse/tests/fixtures/tiny \
         --controlnet crates/gait-diffuse/tests/fixtures/tiny/controlnet \
         --out crates/gait-diffuse/tests/fixtures/tiny_onnx --weights f16 --no-tokenizer
+and the 9-channel inpainting UNet of make_modes_fixtures.py with
+    python tools/diffuse/export_onnx.py --sd crates/gait-diffuse/tests/fixtures/tiny \
+        --unet crates/gait-diffuse/tests/fixtures/tiny_inpaint_unet \
+        --controlnet crates/gait-diffuse/tests/fixtures/tiny/controlnet \
+        --out crates/gait-diffuse/tests/fixtures/tiny_onnx_inpaint --weights f16 --no-tokenizer --only unet
 
 Layout written under --out (what the Rust side reads; `onnx_path` in the TOML, relative to the
 models folder, default `onnx/sd15-controlnet-canny`):
@@ -232,7 +237,9 @@ def export_unet(unet_dir, out, weights, n_down, unet=None, controlnet=None):
     with torch.no_grad():
         if controlnet is None:
             controlnet = ControlNetModel.from_unet(unet)
-        down, mid = controlnet(sample, t, encoder_hidden_states=ctx,
+        # An inpainting UNet (9 channels) pairs with a 4-channel ControlNet,
+        # which sees the latents only.
+        down, mid = controlnet(sample[:, : controlnet.config.in_channels], t, encoder_hidden_states=ctx,
                                controlnet_cond=torch.rand(2, 3, 8 * sample.shape[2], 8 * sample.shape[3]),
                                return_dict=False)
     assert len(down) == n_down, (len(down), n_down)
@@ -286,6 +293,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sd", required=True, help="SD 1.5 folder, diffusers layout")
     ap.add_argument("--controlnet", required=True, help="ControlNet folder, diffusers layout")
+    ap.add_argument("--unet", help="UNet folder, diffusers layout (default: SD/unet), e.g. the "
+                    "9-channel UNet of an inpainting checkpoint")
     ap.add_argument("--out", required=True)
     ap.add_argument("--weights", choices=("f32", "f16"), default="f32",
                     help="storage type of the weights (computation is f32 either way)")
@@ -306,7 +315,7 @@ def main():
         if "controlnet" in only:
             export_controlnet(args.controlnet, args.out, args.weights, cn)
         if "unet" in only:
-            export_unet(os.path.join(args.sd, "unet"), args.out, args.weights, n, controlnet=cn)
+            export_unet(args.unet or os.path.join(args.sd, "unet"), args.out, args.weights, n, controlnet=cn)
     if "vae_decoder" in only:
         export_vae_decoder(args.sd, args.out, args.weights)
     if "vae_encoder" in only:

@@ -16,6 +16,11 @@ crates/gait-diffuse/tests/fixtures/modes.safetensors (f32):
   modes.enc_mean/std (1, 4, 8, 8) vae.encode(init).latent_dist mean and std
   modes.{img2img,inpaint}.{ddim,unipc}.image  (1, 3, 64, 64) output images in [0, 1]
   modes.inpaint_full.unipc.image              the same at strength 1 (pure-noise start)
+  modes.inpaint9.ddim.image, modes.inpaint9_full.unipc.image
+                     the same two runs with a 9-channel inpainting UNet (as
+                     runwayml/stable-diffusion-inpainting: latents, mask and masked-image
+                     latents concatenated), written to crates/gait-diffuse/tests/fixtures/
+                     tiny_inpaint_unet/ (random, seeded, f16 like the other tiny models)
 
 Stock diffusers throughout: the candle and ort tests both compare with these images.
 
@@ -53,10 +58,11 @@ from safetensors.torch import save_file
 from transformers import CLIPTextModel
 
 # SD 1.5's scheduler config (this script runs from its own folder, so the sibling imports).
-from make_fixtures import SCHED_KW
+from make_fixtures import SCHED_KW, UNET_KW, randomize, save_weights
 
 FIX = os.path.join(os.path.dirname(__file__), "..", "..", "crates", "gait-diffuse", "tests", "fixtures")
 TINY = os.path.join(FIX, "tiny")
+INPAINT_UNET = os.path.join(FIX, "tiny_inpaint_unet")
 STEPS, STRENGTH, GUIDANCE, COND_SCALE = 3, 0.75, 7.5, 0.8
 
 
@@ -123,6 +129,11 @@ def main():
     )
     run_all(exp, "modes", common, call, frame_pil, control, mask_pil)
 
+    unet9 = randomize(UNet2DConditionModel(**{**UNET_KW, "in_channels": 9}), 5)
+    save_weights(unet9, INPAINT_UNET, "diffusion_pytorch_model.safetensors")
+    unet9.save_config(INPAINT_UNET)
+    run_inpaint9(exp, {**common, "unet": unet9}, call, frame_pil, control, mask_pil)
+
     exp = {k: v.float().contiguous() for k, v in exp.items()}
     save_file(exp, os.path.join(FIX, "modes.safetensors"))
     print("wrote", os.path.join(FIX, "modes.safetensors"))
@@ -142,6 +153,17 @@ def run_all(exp, prefix, common, call, frame_pil, control, mask_pil):
         if name == "unipc":
             out = pipe(image=frame_pil, mask_image=mask_pil, control_image=control, strength=1.0, **call).images
             exp[f"{prefix}.inpaint_full.unipc.image"] = torch.from_numpy(out).permute(0, 3, 1, 2)
+
+
+def run_inpaint9(exp, common, call, frame_pil, control, mask_pil):
+    for name, cls, strength, key in [
+        ("ddim", DDIMScheduler, STRENGTH, "modes.inpaint9.ddim.image"),
+        ("unipc", UniPCMultistepScheduler, 1.0, "modes.inpaint9_full.unipc.image"),
+    ]:
+        pipe = StableDiffusionControlNetInpaintPipeline(scheduler=cls.from_config(SCHED_KW), **common)
+        pipe.set_progress_bar_config(disable=True)
+        out = pipe(image=frame_pil, mask_image=mask_pil, control_image=control, strength=strength, **call).images
+        exp[key] = torch.from_numpy(out).permute(0, 3, 1, 2)
 
 
 if __name__ == "__main__":
