@@ -33,7 +33,7 @@ pub use error::DiffuseError;
 use gait_core::{ImageRegenerator, StageContext, StageError};
 pub use leg_mask::{LegMask, LegMaskConfig};
 pub use models::DiffusionModels;
-pub use modes::{KeepRegion, RegenMode, begin_step, latent_mask};
+pub use modes::{INPAINT_UNET_CHANNELS, KeepRegion, RegenMode, begin_step, latent_mask};
 pub use noise::NoiseRng;
 pub use ort_models::{OrtDenoiser, OrtModels};
 pub use passthrough::Passthrough;

@@ -26,6 +26,10 @@ pub trait DiffusionModels: Send {
         scale: f64,
     ) -> Result<ControlResiduals, DiffuseError>;
 
+    /// Input channels of the UNet: 4 (latents), or 9 for an inpainting UNet
+    /// (latents, mask, masked-image latents).
+    fn unet_in_channels(&self) -> usize;
+
     /// The UNet's noise prediction with the ControlNet residuals added.
     fn unet(
         &self,
@@ -69,6 +73,10 @@ impl DiffusionModels for Models {
         Ok(self
             .controlnet
             .forward(sample, timestep, context, cond, scale)?)
+    }
+
+    fn unet_in_channels(&self) -> usize {
+        self.unet_in_channels
     }
 
     fn unet(

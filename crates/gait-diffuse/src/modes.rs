@@ -1,9 +1,11 @@
 //! Image-to-image and inpainting from the original frame, as diffusers'
 //! StableDiffusionControlNetImg2ImgPipeline and
-//! StableDiffusionControlNetInpaintPipeline (4-channel UNet, as SD 1.5) do:
-//! the frame's VAE latents are noised to the start timestep that `strength`
-//! picks and denoised from there; inpainting puts the unmasked latents
-//! (noised to the next timestep) back after every step.
+//! StableDiffusionControlNetInpaintPipeline do: the frame's VAE latents are
+//! noised to the start timestep that `strength` picks and denoised from there.
+//! Inpainting with a 4-channel UNet (SD 1.5) puts the unmasked latents (noised
+//! to the next timestep) back after every step; a 9-channel inpainting UNet
+//! (runwayml/stable-diffusion-inpainting) instead sees the mask and the
+//! masked frame's latents as extra input channels.
 
 use std::path::Path;
 
@@ -15,6 +17,9 @@ use crate::pipeline::{ControlnetPipeline, DenoiseParams};
 use crate::schedule::Scheduler;
 use crate::tokenizer::ClipTokenizer;
 use crate::weights::{MERGES_FILE, Models};
+
+/// Input channels of an inpainting UNet: latents (4), mask (1), masked-image latents (4).
+pub const INPAINT_UNET_CHANNELS: usize = 9;
 
 /// Where the denoising starts (`mode = "..."` in `[regenerator]`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -70,6 +75,18 @@ pub fn begin_step(steps: usize, strength: f64) -> Result<usize, DiffuseError> {
         )));
     }
     Ok(steps - run)
+}
+
+/// How the denoising loop keeps the unmasked region.
+pub(crate) enum Inpainting {
+    /// 4-channel UNet: the known latents are put back after every step.
+    Blend(KeepRegion),
+    /// 9-channel UNet: `[latents, mask, masked_latents]` is the UNet's input
+    /// (the ControlNet sees the latents only); nothing is put back.
+    Condition {
+        mask: Tensor,
+        masked_latents: Tensor,
+    },
 }
 
 /// Inpainting's known region: the frame's latents, the noise they get and the
@@ -166,7 +183,8 @@ impl ControlnetPipeline {
 
     /// Inpainting: as [`Self::img2img`], but only where `mask` `(B, 1, H, W)`
     /// (1 = regenerate) is set; at strength 1 the start is pure noise, as in
-    /// diffusers.
+    /// diffusers. A 9-channel inpainting UNet gets the mask and the masked
+    /// frame's latents (same `eps`) as inputs instead of the blending.
     #[allow(clippy::too_many_arguments)]
     pub fn inpaint(
         &self,
@@ -180,21 +198,38 @@ impl ControlnetPipeline {
         p: &DenoiseParams,
     ) -> Result<Tensor, DiffuseError> {
         let begin = begin_step(p.steps, strength)?;
-        let latents = self.encode_latents(images, eps)?;
         let noise = noise.to_dtype(self.dtype)?;
         let sched = Scheduler::new(p.scheduler, p.steps);
-        // DDIM's and UniPC's initial noise sigma is 1.
-        let x = if strength >= 1.0 {
-            noise.clone()
+        let lmask = latent_mask(&mask.to_dtype(self.dtype)?, self.vae_scale())?;
+        let conditioned = self.models.unet_in_channels() == INPAINT_UNET_CHANNELS;
+        // The frame's latents: the start point below strength 1, and the
+        // known region a 4-channel UNet blends back in.
+        let latents = if conditioned && strength >= 1.0 {
+            None
         } else {
-            sched.add_noise(&latents, &noise, sched.timesteps()[begin])?
+            Some(self.encode_latents(images, eps)?)
         };
-        let keep = KeepRegion {
-            image_latents: latents,
-            noise,
-            mask: latent_mask(&mask.to_dtype(self.dtype)?, self.vae_scale())?,
+        // DDIM's and UniPC's initial noise sigma is 1.
+        let x = match &latents {
+            Some(l) if strength < 1.0 => sched.add_noise(l, &noise, sched.timesteps()[begin])?,
+            _ => noise.clone(),
         };
-        self.denoise(context, control, &x, p, begin, Some(&keep))
+        let how = if conditioned {
+            // diffusers: image * (mask < 0.5), encoded like the frame.
+            let keep = mask.lt(0.5)?.to_dtype(images.dtype())?;
+            let masked = images.broadcast_mul(&keep)?;
+            Inpainting::Condition {
+                mask: lmask,
+                masked_latents: self.encode_latents(&masked, eps)?,
+            }
+        } else {
+            Inpainting::Blend(KeepRegion {
+                image_latents: latents.expect("encoded for a 4-channel UNet"),
+                noise,
+                mask: lmask,
+            })
+        };
+        self.denoise(context, control, &x, p, begin, Some(&how))
     }
 }
 

@@ -69,6 +69,8 @@ struct OnnxNet {
     session: Mutex<Session>,
     path: PathBuf,
     inputs: Vec<String>,
+    /// Input shapes, -1 on dynamic axes.
+    input_shapes: Vec<Vec<i64>>,
     outputs: Vec<String>,
 }
 
@@ -83,6 +85,11 @@ impl OnnxNet {
             .iter()
             .map(|i| i.name().to_string())
             .collect();
+        let input_shapes = session
+            .inputs()
+            .iter()
+            .map(|i| i.dtype().tensor_shape().map_or(vec![], |s| s.to_vec()))
+            .collect();
         let outputs = session
             .outputs()
             .iter()
@@ -92,6 +99,7 @@ impl OnnxNet {
             session: Mutex::new(session),
             path: path.to_path_buf(),
             inputs,
+            input_shapes,
             outputs,
         })
     }
@@ -113,6 +121,13 @@ impl OnnxNet {
                 ),
             )),
         }
+    }
+
+    /// The fixed size of axis `axis` of input `name` (None when dynamic).
+    fn input_dim(&self, name: &str, axis: usize) -> Option<usize> {
+        let i = self.inputs.iter().position(|n| n == name)?;
+        let d = *self.input_shapes[i].get(axis)?;
+        usize::try_from(d).ok()
     }
 
     /// Runs the graph; returns every output, in the graph's output order.
@@ -220,6 +235,12 @@ impl OrtDenoiser {
     /// Number of skip-connection residuals (12 for SD 1.5).
     pub fn num_residuals(&self) -> usize {
         self.residuals
+    }
+
+    /// The UNet graph's `sample` channels (4, or 9 for an inpainting UNet;
+    /// 4 when the export left the axis dynamic).
+    pub fn unet_in_channels(&self) -> usize {
+        self.unet.input_dim("sample", 1).unwrap_or(4)
     }
 
     /// See [`DiffusionModels::controlnet`].
@@ -352,6 +373,10 @@ impl OrtModels {
 }
 
 impl DiffusionModels for OrtModels {
+    fn unet_in_channels(&self) -> usize {
+        self.denoiser.unet_in_channels()
+    }
+
     fn encode_text(&self, ids: &Tensor) -> Result<Tensor, DiffuseError> {
         let shape: Vec<i64> = ids.dims().iter().map(|&d| d as i64).collect();
         let data = ids.to_dtype(DType::I64)?.flatten_all()?.to_vec1::<i64>()?;

@@ -9,7 +9,7 @@ use candle_core::{DType, Device, Tensor};
 
 use crate::DiffuseError;
 use crate::models::DiffusionModels;
-use crate::modes::KeepRegion;
+use crate::modes::Inpainting;
 use crate::ort_models::OrtModels;
 use crate::schedule::{Scheduler, SchedulerKind};
 use crate::tokenizer::ClipTokenizer;
@@ -125,8 +125,8 @@ impl ControlnetPipeline {
     }
 
     /// The loop from scheduler step `begin` (image-to-image and inpainting
-    /// skip the noisiest steps); with `keep`, inpainting's known region is
-    /// put back after every step.
+    /// skip the noisiest steps); `inpaint` says how inpainting keeps the
+    /// known region.
     pub(crate) fn denoise(
         &self,
         context: &Tensor,
@@ -134,11 +134,30 @@ impl ControlnetPipeline {
         latents: &Tensor,
         p: &DenoiseParams,
         begin: usize,
-        keep: Option<&KeepRegion>,
+        inpaint: Option<&Inpainting>,
     ) -> Result<Tensor, DiffuseError> {
         let b = latents.dim(0)?;
         let guided = p.guidance_scale > 1.0;
         let copies = if guided { 2 } else { 1 };
+        let unet_channels = self.models.unet_in_channels();
+        let extra = match inpaint {
+            Some(Inpainting::Condition {
+                mask,
+                masked_latents,
+            }) => {
+                let extra = Tensor::cat(&[mask, masked_latents], 1)?.to_dtype(self.dtype)?;
+                Some(Tensor::cat(&vec![&extra; copies], 0)?)
+            }
+            _ => None,
+        };
+        let expected = latents.dim(1)? + extra.as_ref().map_or(Ok(0), |e| e.dim(1))?;
+        if unet_channels != expected {
+            return Err(DiffuseError::Config(format!(
+                "the UNet takes {unet_channels} input channels but this mode gives it {expected}: \
+                 a 9-channel (inpainting) UNet needs regenerator.mode = \"inpaint\", the other \
+                 modes a 4-channel UNet such as SD 1.5's"
+            )));
+        }
         if context.dim(0)? != copies {
             return Err(DiffuseError::Config(format!(
                 "context has {} rows, guidance needs {copies}",
@@ -172,7 +191,12 @@ impl ControlnetPipeline {
             let res = self
                 .models
                 .controlnet(&input, t, &ctx, &control, p.conditioning_scale)?;
-            let eps = self.models.unet(&input, t, &ctx, &res)?;
+            let eps = match &extra {
+                Some(e) => self
+                    .models
+                    .unet(&Tensor::cat(&[&input, e], 1)?, t, &ctx, &res)?,
+                None => self.models.unet(&input, t, &ctx, &res)?,
+            };
             let eps = if guided {
                 let u = eps.narrow(0, 0, b)?;
                 let c = eps.narrow(0, b, b)?;
@@ -181,7 +205,7 @@ impl ControlnetPipeline {
                 eps
             };
             x = sched.step(&eps, &x)?;
-            if let Some(k) = keep {
+            if let Some(Inpainting::Blend(k)) = inpaint {
                 x = k.blend(&sched, &x, timesteps.get(i + 1).copied())?;
             }
         }

@@ -8,7 +8,7 @@ use gait_core::{
 
 use crate::config::ControlnetConfig;
 use crate::leg_mask::LegMask;
-use crate::modes::RegenMode;
+use crate::modes::{INPAINT_UNET_CHANNELS, RegenMode};
 use crate::noise::NoiseRng;
 use crate::pipeline::{ControlnetPipeline, DenoiseParams};
 use crate::warp::{canvas_to_frame, edge_to_canvas, frame_to_canvas};
@@ -84,6 +84,15 @@ impl ControlnetRegenerator {
         pipeline: ControlnetPipeline,
         config: &ControlnetConfig,
     ) -> Result<Self, DiffuseError> {
+        let inpainting_unet = pipeline.models.unet_in_channels() == INPAINT_UNET_CHANNELS;
+        if inpainting_unet && config.mode != RegenMode::Inpaint {
+            return Err(DiffuseError::Config(format!(
+                "the UNet has {INPAINT_UNET_CHANNELS} input channels (an inpainting checkpoint), \
+                 which only regenerator.mode = \"inpaint\" can drive (mode is \"{}\"); use SD 1.5's \
+                 4-channel UNet for the other modes",
+                config.mode.name()
+            )));
+        }
         let context = pipeline.context(
             &config.prompt,
             &config.negative_prompt,

@@ -15,6 +15,7 @@ use crate::DiffuseError;
 use crate::clip_text::ClipTextModel;
 use crate::controlnet::ControlNet;
 use crate::model_config::{TextConfig, UnetConfig, VaeConfig, read_config};
+use crate::modes::INPAINT_UNET_CHANNELS;
 use crate::unet::UNet2DConditionModel;
 use crate::vae_encoder::VaeEncoder;
 
@@ -74,6 +75,8 @@ pub struct Models {
     pub text: ClipTextModel,
     pub vae_config: VaeConfig,
     pub text_config: TextConfig,
+    /// 4, or 9 for an inpainting UNet.
+    pub unet_in_channels: usize,
     /// Image-to-image and inpainting only (see [`Models::load_vae_encoder`]).
     pub vae_encoder: Option<VaeEncoder>,
 }
@@ -105,6 +108,24 @@ impl Models {
                 ),
             ));
         }
+        if ![4, INPAINT_UNET_CHANNELS].contains(&unet_cfg.in_channels) {
+            return Err(DiffuseError::bad_model(
+                sd_dir.join("unet").join("config.json"),
+                format!(
+                    "UNet with {} input channels: SD 1.5's takes 4, an inpainting UNet 9",
+                    unet_cfg.in_channels
+                ),
+            ));
+        }
+        if cn_cfg.in_channels != 4 {
+            return Err(DiffuseError::bad_model(
+                controlnet_dir.join("config.json"),
+                format!(
+                    "ControlNet with {} input channels: it sees the 4 latent channels",
+                    cn_cfg.in_channels
+                ),
+            ));
+        }
         let path = sd_dir.join(UNET_FILE);
         let unet = build_unet(var_builder(&path, dtype, device)?, &unet_cfg)
             .map_err(|e| DiffuseError::bad_model(&path, e))?;
@@ -129,6 +150,7 @@ impl Models {
             text,
             vae_config,
             text_config,
+            unet_in_channels: unet_cfg.in_channels,
             vae_encoder: None,
         })
     }

@@ -61,6 +61,22 @@ fn mismatched_controlnet_is_rejected_with_its_file() {
 }
 
 #[test]
+fn unets_of_other_input_widths_are_rejected_with_their_config() {
+    let dir = tempfile::tempdir().unwrap();
+    common::copy_dir(&common::tiny(), dir.path());
+    edit_json(
+        &dir.path().join("unet/config.json"),
+        "in_channels",
+        5.into(),
+    );
+    let msg = load_err(dir.path(), &dir.path().join("controlnet"));
+    assert!(
+        msg.contains("unet/config.json") && msg.contains("5 input channels"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn a_unet_file_given_as_controlnet_names_the_missing_tensor() {
     let dir = tempfile::tempdir().unwrap();
     common::copy_dir(&common::tiny(), dir.path());

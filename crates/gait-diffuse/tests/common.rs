@@ -165,7 +165,7 @@ pub fn check_modes(label: &str, pipe: &gait_diffuse::ControlnetPipeline, init: &
     use gait_diffuse::SchedulerKind;
     let e = modes();
     let ctx = paper_context(pipe);
-    let (control, mask) = (modes_control(&e), modes_mask(&e));
+    let control = modes_control(&e);
     for (name, kind) in [
         ("ddim", SchedulerKind::Ddim),
         ("unipc", SchedulerKind::Unipc),
@@ -204,7 +204,22 @@ pub fn check_modes(label: &str, pipe: &gait_diffuse::ControlnetPipeline, init: &
             "modes.inpaint_full.unipc.image",
         ),
     ];
-    for (name, kind, strength, key) in inpaint {
+    check_inpaint(label, pipe, init, &inpaint, tol);
+}
+
+/// Inpainting `(scheduler name, scheduler, strength, fixture key)` cases
+/// against the modes fixture's images.
+pub fn check_inpaint(
+    label: &str,
+    pipe: &gait_diffuse::ControlnetPipeline,
+    init: &Tensor,
+    cases: &[(&str, gait_diffuse::SchedulerKind, f64, &str)],
+    tol: f64,
+) {
+    let e = modes();
+    let ctx = paper_context(pipe);
+    let (control, mask) = (modes_control(&e), modes_mask(&e));
+    for &(name, kind, strength, key) in cases {
         let img = pipe
             .inpaint(
                 &ctx,
@@ -220,4 +235,57 @@ pub fn check_modes(label: &str, pipe: &gait_diffuse::ControlnetPipeline, init: &
         let what = format!("{label}inpaint {name} strength {strength}");
         assert_close(&what, &img, &e[key], tol);
     }
+}
+
+/// The 9-channel inpainting UNet's runs (DDIM at 0.75, UniPC at 1) against
+/// diffusers; `pipe` must have loaded that UNet.
+pub fn check_inpaint9(
+    label: &str,
+    pipe: &gait_diffuse::ControlnetPipeline,
+    init: &Tensor,
+    tol: f64,
+) {
+    use gait_diffuse::SchedulerKind;
+    assert_eq!(
+        pipe.models.unet_in_channels(),
+        9,
+        "{label}not the inpainting UNet"
+    );
+    let cases = [
+        (
+            "ddim",
+            SchedulerKind::Ddim,
+            0.75,
+            "modes.inpaint9.ddim.image",
+        ),
+        (
+            "unipc",
+            SchedulerKind::Unipc,
+            1.0,
+            "modes.inpaint9_full.unipc.image",
+        ),
+    ];
+    check_inpaint(&format!("{label}9-channel "), pipe, init, &cases, tol);
+    // The other modes cannot drive an inpainting UNet.
+    let e = modes();
+    let err = pipe
+        .generate(
+            &paper_context(pipe),
+            &modes_control(&e),
+            &e["modes.noise"],
+            &modes_params(SchedulerKind::Ddim),
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("mode = \"inpaint\""), "{err}");
+}
+
+/// The 9-channel inpainting UNet of make_modes_fixtures.py (diffusers layout).
+pub fn tiny_inpaint_unet() -> PathBuf {
+    fixtures().join("tiny_inpaint_unet")
+}
+
+/// Its ONNX export (`unet/model.onnx`).
+pub fn tiny_onnx_inpaint() -> PathBuf {
+    fixtures().join("tiny_onnx_inpaint")
 }

@@ -61,6 +61,47 @@ fn img2img_and_inpaint_match_diffusers() {
     common::check_modes("", &pipeline(), &init_image(&modes()), TOL);
 }
 
+/// The tiny pipeline with the 9-channel inpainting UNet in place of SD's.
+fn inpaint9_pipeline() -> ControlnetPipeline {
+    let dir = tempfile::tempdir().unwrap();
+    let sd = dir.path().join("sd");
+    common::copy_dir(&tiny(), &sd);
+    std::fs::remove_dir_all(sd.join("unet")).unwrap();
+    common::copy_dir(&common::tiny_inpaint_unet(), &sd.join("unet"));
+    ControlnetPipeline::load_with_encoder(&sd, &tiny().join("controlnet"), DType::F32, &Device::Cpu)
+        .unwrap()
+}
+
+#[test]
+fn nine_channel_inpainting_unet_matches_diffusers() {
+    common::check_inpaint9("", &inpaint9_pipeline(), &init_image(&modes()), TOL);
+}
+
+#[test]
+fn the_regenerator_drives_an_inpainting_unet_in_inpaint_mode_only() {
+    let Err(err) = ControlnetRegenerator::from_pipeline(inpaint9_pipeline(), &config("")) else {
+        panic!("text2img accepted a 9-channel UNet")
+    };
+    let err = err.to_string();
+    assert!(
+        err.contains("9 input channels") && err.contains("\"text2img\""),
+        "{err}"
+    );
+
+    let (frames, edges) = inputs();
+    let mut r = ControlnetRegenerator::from_pipeline(
+        inpaint9_pipeline(),
+        &config("mode = \"inpaint\"\nstrength = 0.75"),
+    )
+    .unwrap();
+    let out = r
+        .regenerate_with_poses(&frames[..1], Some(&edges[..1]), &[leg_pose()])
+        .unwrap();
+    assert_eq!(out[0].index, frames[0].index);
+    assert_eq!(out[0].image.dimensions(), frames[0].image.dimensions());
+    assert_ne!(out[0].image, frames[0].image, "the legs were redrawn");
+}
+
 fn config(toml: &str) -> ControlnetConfig {
     let text = format!(
         "kind = \"controlnet\"\nsteps = 3\nscheduler = \"ddim\"\nresolution = 64\nseed = 2\n{toml}"

@@ -27,6 +27,21 @@ fn ort_img2img_and_inpaint_match_diffusers() {
     common::check_modes("ort ", &pipeline(), &modes()["modes.init"], TOL);
 }
 
+#[test]
+fn ort_nine_channel_inpainting_unet_matches_diffusers() {
+    require_ort();
+    let dir = tempfile::tempdir().unwrap();
+    common::copy_dir(&tiny_onnx(), dir.path());
+    std::fs::remove_dir_all(dir.path().join("unet")).unwrap();
+    common::copy_dir(
+        &common::tiny_onnx_inpaint().join("unet"),
+        &dir.path().join("unet"),
+    );
+    let pipe =
+        ControlnetPipeline::load_ort(dir.path(), &tiny().join("tokenizer/merges.txt")).unwrap();
+    common::check_inpaint9("ort ", &pipe, &modes()["modes.init"], TOL);
+}
+
 /// The whole regenerator in inpaint mode on ort and on candle, from one
 /// models folder: the same frames within a rounding level.
 #[test]
