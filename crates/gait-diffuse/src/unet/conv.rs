@@ -9,6 +9,12 @@ use candle_core::{Result, Tensor};
 use candle_nn::VarBuilder;
 
 use super::cpu::{self, View};
+use super::winograd::{self, Start};
+
+/// Images at least this large take the Winograd path for 3x3 kernels (below
+/// it, SD's 8x8 level, the per-call weight transform outweighs the saved
+/// products: examples/conv_bench).
+const WINOGRAD_MIN_PIXELS: usize = 64;
 
 /// A 2-D convolution (square kernel).
 #[derive(Debug, Clone)]
@@ -97,6 +103,9 @@ impl Conv2d {
             );
         }
         let k = self.kernel;
+        if k == 3 && h * w >= WINOGRAD_MIN_PIXELS {
+            return self.winograd(x, per_image, residual);
+        }
         let pad = self.padding;
         let (wp, hp) = (w + 2 * pad, h + 2 * pad);
         // Output columns run over the padded width; the last 2*pad of each row are dropped.
@@ -222,6 +231,42 @@ impl Conv2d {
                 })
             })
         })?;
+        cpu::tensor(out, &[b, c_out, h, w])
+    }
+}
+
+impl Conv2d {
+    /// The 3x3 case of [`Conv2d::shifted`] by Winograd's F(2x2, 3x3)
+    /// (shapes already checked).
+    fn winograd(
+        &self,
+        x: &Tensor,
+        per_image: Option<&Tensor>,
+        residual: Option<&Tensor>,
+    ) -> Result<Tensor> {
+        let (b, c_in, h, w) = x.dims4()?;
+        let c_out = self.weight.dim(0)?;
+        let per_v = per_image
+            .map(|p| p.flatten_all()?.to_vec1::<f32>())
+            .transpose()?;
+        let run = |res: Option<&[f32]>| {
+            cpu::with_f32(x, |xs| {
+                cpu::with_f32(&self.weight, |ws| {
+                    cpu::with_f32(&self.bias, |bias| {
+                        let start = Start {
+                            bias,
+                            per_image: per_v.as_deref(),
+                            residual: res,
+                        };
+                        winograd::conv3x3(xs, (b, c_in, h, w), ws, c_out, &start)
+                    })
+                })
+            })
+        };
+        let out = match residual {
+            Some(r) => cpu::with_f32(r, |rs| run(Some(rs)))?,
+            None => run(None)?,
+        };
         cpu::tensor(out, &[b, c_out, h, w])
     }
 }

@@ -81,6 +81,24 @@ pub(crate) unsafe fn matmul(
     }
 }
 
+thread_local! {
+    /// Work buffers kept between calls: the convolutions' buffers are tens of
+    /// MB, and fresh ones cost a page fault per 4 KiB on every call.
+    static SCRATCH: std::cell::RefCell<Vec<Vec<f32>>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` on a work buffer of `len` values with unspecified contents
+/// (reused from earlier calls on this thread; `f` must write before reading).
+pub(crate) fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f32]) -> R) -> R {
+    let mut buf = SCRATCH.with(|s| s.borrow_mut().pop()).unwrap_or_default();
+    if buf.len() < len {
+        buf.resize(len, 0.0);
+    }
+    let out = f(&mut buf[..len]);
+    SCRATCH.with(|s| s.borrow_mut().push(buf));
+    out
+}
+
 /// `exp(x)` (clamped to [-87.3, 88]), within a few ulp (Cephes' `expf` reduction and
 /// polynomial), written without branches so loops over it vectorise.
 #[inline(always)]

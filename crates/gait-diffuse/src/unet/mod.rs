@@ -14,6 +14,7 @@ mod model;
 mod norm;
 mod resnet;
 mod transformer;
+mod winograd;
 
 pub use conv::{Conv2d, conv2d};
 pub use embeddings::{TimestepEmbedding, Timesteps};

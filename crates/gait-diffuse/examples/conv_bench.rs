@@ -1,0 +1,58 @@
+//! Throughput of gait-diffuse's 3x3 convolution (the UNet's ResNet convs) and
+//! of candle's f32 matmul at SD 1.5's shapes, in GFLOP/s (best of 5). Pair it
+//! with tools/diffuse/conv_bench.py, which times torch on the same shapes.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use candle_core::{DType, Device, Tensor};
+use candle_nn::VarBuilder;
+use gait_diffuse::unet::conv2d;
+
+fn best(mut f: impl FnMut()) -> f64 {
+    f();
+    (0..5)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn main() -> candle_core::Result<()> {
+    let dev = Device::Cpu;
+    for (c, hw) in [(320, 64), (640, 32), (1280, 16), (1280, 8)] {
+        let mut m = HashMap::new();
+        m.insert(
+            "weight".to_string(),
+            Tensor::randn(0f32, 0.02, (c, c, 3, 3), &dev)?,
+        );
+        m.insert("bias".to_string(), Tensor::zeros(c, DType::F32, &dev)?);
+        let conv = conv2d(c, c, 3, 1, 1, VarBuilder::from_tensors(m, DType::F32, &dev))?;
+        let x = Tensor::randn(0f32, 1.0, (2, c, hw, hw), &dev)?;
+        let s = best(|| {
+            conv.forward(&x).unwrap();
+        });
+        let flop = 2.0 * 2.0 * (hw * hw) as f64 * (9 * c * c) as f64;
+        println!(
+            "conv3x3 c={c} {hw}x{hw} b2: {:.1} GFLOP/s ({:.1} ms)",
+            flop / s / 1e9,
+            s * 1e3
+        );
+    }
+    for (m, k, n) in [(8192, 320, 2560), (4096, 2880, 320), (2048, 640, 640)] {
+        let a = Tensor::randn(0f32, 1.0, (m, k), &dev)?;
+        let b = Tensor::randn(0f32, 1.0, (k, n), &dev)?;
+        let s = best(|| {
+            a.matmul(&b).unwrap();
+        });
+        let flop = 2.0 * (m * k * n) as f64;
+        println!(
+            "matmul {m}x{k}x{n}: {:.1} GFLOP/s ({:.1} ms)",
+            flop / s / 1e9,
+            s * 1e3
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,31 @@
+#!/usr/bin/env python3
+"""torch's side of gait-diffuse's examples/conv_bench.rs: the same 3x3 convolutions and
+matmuls at SD 1.5's shapes, f32, 2 threads, GFLOP/s (best of 5)."""
+import time
+
+import torch
+
+torch.set_num_threads(2)
+
+
+def best(f):
+    f()
+    out = []
+    for _ in range(5):
+        t = time.perf_counter()
+        f()
+        out.append(time.perf_counter() - t)
+    return min(out)
+
+
+with torch.no_grad():
+    for c, hw in [(320, 64), (640, 32), (1280, 16), (1280, 8)]:
+        conv = torch.nn.Conv2d(c, c, 3, padding=1)
+        x = torch.randn(2, c, hw, hw)
+        s = best(lambda: conv(x))
+        flop = 2 * 2 * hw * hw * 9 * c * c
+        print(f"conv3x3 c={c} {hw}x{hw} b2: {flop / s / 1e9:.1f} GFLOP/s ({s * 1e3:.1f} ms)")
+    for m, k, n in [(8192, 320, 2560), (4096, 2880, 320), (2048, 640, 640)]:
+        a, b = torch.randn(m, k), torch.randn(k, n)
+        s = best(lambda: a @ b)
+        print(f"matmul {m}x{k}x{n}: {2 * m * k * n / s / 1e9:.1f} GFLOP/s ({s * 1e3:.1f} ms)")
