@@ -7,10 +7,11 @@
 //! exists; elsewhere candle's ops.
 
 use candle_core::{D, Module, Result, Tensor};
-use candle_nn::{Linear, VarBuilder, linear, linear_no_bias};
+use candle_nn::VarBuilder;
 use rayon::prelude::*;
 
 use super::cpu::{self, SharedMut, View};
+use super::linear::{Linear, linear, linear_no_bias};
 
 /// Query rows per task of the fused kernel: 64 rows of 4096 f32 scores
 /// (SD 1.5's 64x64 latents) are 1 MiB.

@@ -50,6 +50,10 @@ pub(crate) struct View {
     pub rs: isize,
     pub cs: isize,
 }
+// SAFETY: a view only reads, and the products that take one (whose callers
+// guarantee the memory stays valid) return before it goes out of scope.
+unsafe impl Send for View {}
+unsafe impl Sync for View {}
 
 /// `dst (m x n) = [dst +] lhs (m x k) @ rhs (k x n)`, on all threads when
 /// `parallel` (the caller is not already inside a parallel loop).
@@ -67,7 +71,18 @@ pub(crate) unsafe fn matmul(
     rhs: View,
     parallel: bool,
 ) {
-    let par = if parallel && candle_core::utils::get_num_threads() > 1 {
+    let threads = if parallel {
+        candle_core::utils::get_num_threads()
+    } else {
+        1
+    };
+    // The packed kernel pays for its copies once both sides are wide.
+    if m >= 64 && n >= 64 && super::sgemm::available() {
+        // SAFETY: forwarded from the caller.
+        unsafe { super::sgemm::sgemm((m, n, k), dst, dst_rs, accumulate, lhs, rhs, threads) };
+        return;
+    }
+    let par = if threads > 1 {
         gemm::Parallelism::Rayon(candle_core::utils::get_num_threads())
     } else {
         gemm::Parallelism::None

@@ -10,9 +10,11 @@ mod conv;
 mod cpu;
 mod embeddings;
 pub(crate) mod encoder;
+mod linear;
 mod model;
 mod norm;
 mod resnet;
+mod sgemm;
 mod transformer;
 mod winograd;
 

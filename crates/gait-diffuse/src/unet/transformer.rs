@@ -5,10 +5,11 @@
 //! tokens.
 
 use candle_core::{Module, Result, Tensor};
-use candle_nn::{LayerNorm, Linear, VarBuilder, layer_norm, linear};
+use candle_nn::{LayerNorm, VarBuilder, layer_norm};
 
 use super::attention::Attention;
 use super::conv::{Conv2d, conv2d};
+use super::linear::{Linear, linear};
 use super::norm::{GroupNorm, group_norm};
 
 /// One transformer layer (`transformer_blocks.{i}`).
