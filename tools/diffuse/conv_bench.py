@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """torch's side of gait-diffuse's examples/conv_bench.rs: the same 3x3 convolutions and
-matmuls at SD 1.5's shapes, f32, 2 threads, GFLOP/s (best of 5)."""
+linear layers at SD 1.5's shapes, f32, 2 threads, GFLOP/s (best of 5)."""
 import time
 
 import torch
@@ -26,6 +26,7 @@ with torch.no_grad():
         flop = 2 * 2 * hw * hw * 9 * c * c
         print(f"conv3x3 c={c} {hw}x{hw} b2: {flop / s / 1e9:.1f} GFLOP/s ({s * 1e3:.1f} ms)")
     for m, k, n in [(8192, 320, 2560), (4096, 2880, 320), (2048, 640, 640)]:
-        a, b = torch.randn(m, k), torch.randn(k, n)
-        s = best(lambda: a @ b)
-        print(f"matmul {m}x{k}x{n}: {2 * m * k * n / s / 1e9:.1f} GFLOP/s ({s * 1e3:.1f} ms)")
+        lin = torch.nn.Linear(k, n, bias=False)
+        x = torch.randn(m, k)
+        s = best(lambda: lin(x))
+        print(f"linear {m}x{k}x{n} (torch): {2 * m * k * n / s / 1e9:.1f} GFLOP/s ({s * 1e3:.1f} ms)")

@@ -1,13 +1,15 @@
-//! Throughput of gait-diffuse's 3x3 convolution (the UNet's ResNet convs) and
-//! of candle's f32 matmul at SD 1.5's shapes, in GFLOP/s (best of 5). Pair it
-//! with tools/diffuse/conv_bench.py, which times torch on the same shapes.
+//! Throughput of gait-diffuse's 3x3 convolution (the UNet's ResNet convs), of
+//! its linear layer and of candle's own linear layer (the `gemm` crate) at
+//! SD 1.5's shapes, in GFLOP/s (best of 5). Pair it with
+//! tools/diffuse/conv_bench.py, which times torch on the same shapes.
 
 use std::collections::HashMap;
 use std::time::Instant;
 
+use candle_core::Module;
 use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
-use gait_diffuse::unet::conv2d;
+use gait_diffuse::unet::{conv2d, linear_no_bias};
 
 fn best(mut f: impl FnMut()) -> f64 {
     f();
@@ -41,15 +43,31 @@ fn main() -> candle_core::Result<()> {
             s * 1e3
         );
     }
+    // x (m, k) through a k -> n layer: ours, then candle_nn's.
     for (m, k, n) in [(8192, 320, 2560), (4096, 2880, 320), (2048, 640, 640)] {
-        let a = Tensor::randn(0f32, 1.0, (m, k), &dev)?;
-        let b = Tensor::randn(0f32, 1.0, (k, n), &dev)?;
-        let s = best(|| {
-            a.matmul(&b).unwrap();
-        });
+        let mut w = HashMap::new();
+        w.insert(
+            "weight".to_string(),
+            Tensor::randn(0f32, 1.0, (n, k), &dev)?,
+        );
+        let vb = VarBuilder::from_tensors(w, DType::F32, &dev);
+        let ours = linear_no_bias(k, n, vb.clone())?;
+        let theirs = candle_nn::linear_no_bias(k, n, vb)?;
+        let x = Tensor::randn(0f32, 1.0, (m, k), &dev)?;
         let flop = 2.0 * (m * k * n) as f64;
+        let s = best(|| {
+            ours.forward(&x).unwrap();
+        });
         println!(
-            "matmul {m}x{k}x{n}: {:.1} GFLOP/s ({:.1} ms)",
+            "linear {m}x{k}x{n} (ours): {:.1} GFLOP/s ({:.1} ms)",
+            flop / s / 1e9,
+            s * 1e3
+        );
+        let s = best(|| {
+            theirs.forward(&x).unwrap();
+        });
+        println!(
+            "linear {m}x{k}x{n} (candle_nn): {:.1} GFLOP/s ({:.1} ms)",
             flop / s / 1e9,
             s * 1e3
         );

@@ -20,4 +20,5 @@ mod winograd;
 
 pub use conv::{Conv2d, conv2d};
 pub use embeddings::{TimestepEmbedding, Timesteps};
+pub use linear::{Linear, linear, linear_no_bias};
 pub use model::UNet2DConditionModel;

@@ -9,7 +9,7 @@
 
 use rayon::prelude::*;
 
-use super::cpu::{SharedMut, View};
+use super::cpu::{self, SharedMut, View};
 
 /// Register tile: rows of A (broadcast) and columns of B (two 16-wide vectors).
 const MR: usize = 8;
@@ -110,8 +110,31 @@ unsafe fn single(
     lhs: View,
     rhs: View,
 ) {
-    let mut bp = vec![0f32; KC * NC.min(n.div_ceil(NR) * NR)];
-    let mut ap = vec![0f32; KC * MC.min(m.div_ceil(MR) * MR)];
+    // Packing buffers come from the thread's scratch pool: attention calls
+    // this thousands of times per layer, and fresh pages cost a fault each.
+    let kc_max = KC.min(k).max(1);
+    let bp_len = kc_max * NC.min(n.div_ceil(NR) * NR);
+    let ap_len = kc_max * MC.min(m.div_ceil(MR) * MR);
+    cpu::with_scratch(bp_len, |bp| {
+        cpu::with_scratch(ap_len, |ap| {
+            // SAFETY: forwarded from the caller.
+            unsafe { blocks((m, n, k), dst, dst_rs, accumulate, lhs, rhs, bp, ap) }
+        })
+    })
+}
+
+/// The blocked loops of [`single`] over packed panels in `bp` and `ap`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn blocks(
+    (m, n, k): (usize, usize, usize),
+    dst: *mut f32,
+    dst_rs: isize,
+    accumulate: bool,
+    lhs: View,
+    rhs: View,
+    bp: &mut [f32],
+    ap: &mut [f32],
+) {
     for jc in (0..n).step_by(NC) {
         let nc = NC.min(n - jc);
         if k == 0 && !accumulate {
@@ -126,10 +149,10 @@ unsafe fn single(
         for pc in (0..k).step_by(KC) {
             let kc = KC.min(k - pc);
             // SAFETY: the caller's views cover k x n and m x k.
-            unsafe { pack_b(&mut bp, rhs, pc, kc, jc, nc) };
+            unsafe { pack_b(bp, rhs, pc, kc, jc, nc) };
             for ic in (0..m).step_by(MC) {
                 let mc = MC.min(m - ic);
-                unsafe { pack_a(&mut ap, lhs, ic, mc, pc, kc) };
+                unsafe { pack_a(ap, lhs, ic, mc, pc, kc) };
                 let load = accumulate || pc > 0;
                 for jr in (0..nc).step_by(NR) {
                     let b = &bp[jr * kc..];
@@ -156,21 +179,38 @@ unsafe fn pack_b(bp: &mut [f32], rhs: View, pc: usize, kc: usize, jc: usize, nc:
         .enumerate()
     {
         let cols = NR.min(nc - s * NR);
-        for p in 0..kc {
-            let row = &mut strip[p * NR..(p + 1) * NR];
-            // SAFETY: (pc + p, jc + s*NR + j) is inside rhs for j < cols.
-            let src = unsafe {
-                rhs.ptr
-                    .offset((pc + p) as isize * rhs.rs + (jc + s * NR) as isize * rhs.cs)
-            };
-            if rhs.cs == 1 {
-                row[..cols].copy_from_slice(unsafe { std::slice::from_raw_parts(src, cols) });
-            } else {
-                for (j, v) in row[..cols].iter_mut().enumerate() {
-                    *v = unsafe { *src.offset(j as isize * rhs.cs) };
+        // SAFETY: (pc + p, jc + s*NR + j) is inside rhs for p < kc, j < cols.
+        let at = |p: usize, j: usize| unsafe {
+            rhs.ptr
+                .offset((pc + p) as isize * rhs.rs + (jc + s * NR + j) as isize * rhs.cs)
+        };
+        if rhs.cs == 1 {
+            for (p, row) in strip.chunks_exact_mut(NR).enumerate() {
+                row[..cols].copy_from_slice(unsafe { std::slice::from_raw_parts(at(p, 0), cols) });
+                row[cols..].fill(0.0);
+            }
+        } else if rhs.rs == 1 {
+            // Columns are contiguous (a transposed matrix): read down each one.
+            for j in 0..NR {
+                if j < cols {
+                    let col = unsafe { std::slice::from_raw_parts(at(0, j), kc) };
+                    for (p, v) in col.iter().enumerate() {
+                        strip[p * NR + j] = *v;
+                    }
+                } else {
+                    (0..kc).for_each(|p| strip[p * NR + j] = 0.0);
                 }
             }
-            row[cols..].fill(0.0);
+        } else {
+            for (p, row) in strip.chunks_exact_mut(NR).enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    *v = if j < cols {
+                        unsafe { at(p, j).read_unaligned() }
+                    } else {
+                        0.0
+                    };
+                }
+            }
         }
     }
 }
@@ -184,20 +224,44 @@ unsafe fn pack_a(ap: &mut [f32], lhs: View, ic: usize, mc: usize, pc: usize, kc:
         .enumerate()
     {
         let rows = MR.min(mc - s * MR);
-        for r in 0..MR {
-            if r >= rows {
-                for p in 0..kc {
-                    strip[p * MR + r] = 0.0;
+        // SAFETY: (ic + s*MR + r, pc + p) is inside lhs for r < rows, p < kc.
+        let at = |r: usize, p: usize| unsafe {
+            lhs.ptr
+                .offset((ic + s * MR + r) as isize * lhs.rs + (pc + p) as isize * lhs.cs)
+        };
+        if lhs.cs == 1 && rows == MR {
+            // Rows are contiguous: read the MR rows side by side, write in order.
+            let src: [&[f32]; MR] =
+                std::array::from_fn(|r| unsafe { std::slice::from_raw_parts(at(r, 0), kc) });
+            for (p, out) in strip.chunks_exact_mut(MR).enumerate() {
+                for (o, row) in out.iter_mut().zip(&src) {
+                    *o = row[p];
                 }
-                continue;
             }
-            // SAFETY: (ic + s*MR + r, pc + p) is inside lhs.
-            let src = unsafe {
-                lhs.ptr
-                    .offset((ic + s * MR + r) as isize * lhs.rs + pc as isize * lhs.cs)
-            };
-            for p in 0..kc {
-                strip[p * MR + r] = unsafe { *src.offset(p as isize * lhs.cs) };
+        } else if lhs.rs == 1 {
+            // Columns are contiguous: each step p is MR consecutive values.
+            for (p, out) in strip.chunks_exact_mut(MR).enumerate() {
+                if rows == MR {
+                    out.copy_from_slice(unsafe { std::slice::from_raw_parts(at(0, p), MR) });
+                } else {
+                    for (r, o) in out.iter_mut().enumerate() {
+                        *o = if r < rows {
+                            unsafe { at(r, p).read_unaligned() }
+                        } else {
+                            0.0
+                        };
+                    }
+                }
+            }
+        } else {
+            for (p, out) in strip.chunks_exact_mut(MR).enumerate() {
+                for (r, o) in out.iter_mut().enumerate() {
+                    *o = if r < rows {
+                        unsafe { at(r, p).read_unaligned() }
+                    } else {
+                        0.0
+                    };
+                }
             }
         }
     }
@@ -299,31 +363,39 @@ mod tests {
             (260, 40, 5),
             (8, 32, 0),
         ];
+        // Layout 0: row-major; 1: transposed (column-major); 2: every other
+        // element of a row-major matrix twice as wide (neither stride is 1).
+        let view = |v: &[f32], rows: usize, cols: usize, layout: usize| match layout {
+            0 => View {
+                ptr: v.as_ptr(),
+                rs: cols as isize,
+                cs: 1,
+            },
+            1 => View {
+                ptr: v.as_ptr(),
+                rs: 1,
+                cs: rows as isize,
+            },
+            _ => View {
+                ptr: v.as_ptr(),
+                rs: 2 * cols as isize,
+                cs: 2,
+            },
+        };
+        let index = |i: usize, j: usize, rows: usize, cols: usize, layout: usize| match layout {
+            0 => i * cols + j,
+            1 => j * rows + i,
+            _ => 2 * (i * cols + j),
+        };
         for (m, n, k) in shapes {
-            for (threads, accumulate, transposed) in
-                [(1, false, false), (2, true, true), (3, false, true)]
-            {
-                let a: Vec<f32> = (0..m * k).map(|i| ((i * 7) % 13) as f32 - 6.0).collect();
-                let b: Vec<f32> = (0..k * n).map(|i| ((i * 5) % 11) as f32 - 5.0).collect();
-                // A as m x k row-major, or its transpose stored k x m.
-                let lhs = if transposed {
-                    View {
-                        ptr: a.as_ptr(),
-                        rs: 1,
-                        cs: m as isize,
-                    }
-                } else {
-                    View {
-                        ptr: a.as_ptr(),
-                        rs: k as isize,
-                        cs: 1,
-                    }
-                };
-                let rhs = View {
-                    ptr: b.as_ptr(),
-                    rs: n as isize,
-                    cs: 1,
-                };
+            for (threads, accumulate, layout) in [(1, false, 0), (2, true, 1), (3, false, 2)] {
+                let a: Vec<f32> = (0..2 * m * k)
+                    .map(|i| ((i * 7) % 13) as f32 - 6.0)
+                    .collect();
+                let b: Vec<f32> = (0..2 * k * n)
+                    .map(|i| ((i * 5) % 11) as f32 - 5.0)
+                    .collect();
+                let (lhs, rhs) = (view(&a, m, k, layout), view(&b, k, n, layout));
                 let mut c: Vec<f32> = (0..m * n).map(|i| (i % 3) as f32).collect();
                 let c0 = c.clone();
                 unsafe {
@@ -341,17 +413,12 @@ mod tests {
                     for j in 0..n {
                         let mut s = if accumulate { c0[i * n + j] } else { 0.0 };
                         for p in 0..k {
-                            let av = if transposed {
-                                a[p * m + i]
-                            } else {
-                                a[i * k + p]
-                            };
-                            s += av * b[p * n + j];
+                            s += a[index(i, p, m, k, layout)] * b[index(p, j, k, n, layout)];
                         }
                         assert_eq!(
                             c[i * n + j],
                             s,
-                            "{m}x{n}x{k} threads {threads} at ({i}, {j})"
+                            "{m}x{n}x{k} layout {layout} threads {threads} at ({i}, {j})"
                         );
                     }
                 }

@@ -70,30 +70,46 @@ pub(crate) fn conv3x3(
 }
 
 /// `U = G g G^T` for every channel pair, as 16 matrices `(c_out, c_in)` in `u`.
+/// Per output channel the 9 taps are first laid out along the input channels,
+/// so the transform runs over contiguous rows and writes 16 contiguous rows.
 fn transform_weights(weight: &[f32], c_out: usize, c_in: usize, u: &mut [f32]) {
     let dst = SharedMut(u.as_mut_ptr());
-    (0..c_out).into_par_iter().for_each(|co| {
-        for ci in 0..c_in {
-            let g = &weight[(co * c_in + ci) * 9..][..9];
-            // G g: 4x3, G = [[1,0,0],[1/2,1/2,1/2],[1/2,-1/2,1/2],[0,0,1]].
-            let mut gg = [[0f32; 3]; 4];
-            for c in 0..3 {
-                let (g0, g1, g2) = (g[c], g[3 + c], g[6 + c]);
-                gg[0][c] = g0;
-                gg[1][c] = 0.5 * (g0 + g1 + g2);
-                gg[2][c] = 0.5 * (g0 - g1 + g2);
-                gg[3][c] = g2;
-            }
-            for (r, row) in gg.iter().enumerate() {
-                let [a, b, c] = *row;
-                let vals = [a, 0.5 * (a + b + c), 0.5 * (a - b + c), c];
-                for (s, val) in vals.into_iter().enumerate() {
-                    // SAFETY: (r*4+s, co, ci) is written by this task only.
-                    unsafe { *dst.get().add(((r * 4 + s) * c_out + co) * c_in + ci) = val };
+    (0..c_out).into_par_iter().for_each_init(
+        || vec![0f32; 9 * c_in],
+        |taps, co| {
+            for ci in 0..c_in {
+                let g = &weight[(co * c_in + ci) * 9..][..9];
+                for (t, v) in g.iter().enumerate() {
+                    taps[t * c_in + ci] = *v;
                 }
             }
-        }
-    });
+            let tap = |ky: usize, kx: usize| &taps[(ky * 3 + kx) * c_in..][..c_in];
+            // SAFETY: row (xi, co) of U is written by this task only.
+            let row = |xi: usize| unsafe {
+                std::slice::from_raw_parts_mut(dst.get().add((xi * c_out + co) * c_in), c_in)
+            };
+            // G = [[1,0,0],[1/2,1/2,1/2],[1/2,-1/2,1/2],[0,0,1]]: (G g)[r] per column kx.
+            for r in 0..4 {
+                let gg = |kx: usize, ci: usize| {
+                    let (a, b, c) = (tap(0, kx)[ci], tap(1, kx)[ci], tap(2, kx)[ci]);
+                    match r {
+                        0 => a,
+                        1 => 0.5 * (a + b + c),
+                        2 => 0.5 * (a - b + c),
+                        _ => c,
+                    }
+                };
+                let (o0, o1, o2, o3) = (row(r * 4), row(r * 4 + 1), row(r * 4 + 2), row(r * 4 + 3));
+                for ci in 0..c_in {
+                    let (a, b, c) = (gg(0, ci), gg(1, ci), gg(2, ci));
+                    o0[ci] = a;
+                    o1[ci] = 0.5 * (a + b + c);
+                    o2[ci] = 0.5 * (a - b + c);
+                    o3[ci] = c;
+                }
+            }
+        },
+    );
 }
 
 /// `V = B^T d B` for every 4x4 input patch (tile stride 2, zero padding 1),
