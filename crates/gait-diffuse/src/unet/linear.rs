@@ -5,6 +5,7 @@
 
 use candle_core::{Module, Result, Tensor};
 use candle_nn::VarBuilder;
+use rayon::prelude::*;
 
 use super::cpu::{self, View};
 
@@ -43,10 +44,16 @@ impl Module for Linear {
             candle_core::bail!("linear: input {dims:?}, weight ({out_dim}, {in_dim})");
         }
         let rows = x.elem_count() / in_dim;
-        let mut out = match self.inner.bias() {
-            Some(b) => b.to_vec1::<f32>()?.repeat(rows),
-            None => vec![0f32; rows * out_dim],
-        };
+        // Without a bias the product writes the fresh buffer without reading
+        // it (reading untouched pages first costs a second fault per page).
+        let bias = self.inner.bias();
+        let mut out = vec![0f32; rows * out_dim];
+        if let Some(b) = bias {
+            // Filled on all threads: the first touch of each page faults.
+            let b = b.to_vec1::<f32>()?;
+            out.par_chunks_mut(out_dim)
+                .for_each(|row| row.copy_from_slice(&b));
+        }
         cpu::with_f32(x, |xs| {
             cpu::with_f32(w, |ws| {
                 // SAFETY: xs is rows x in_dim, ws is out_dim x in_dim (read
@@ -56,7 +63,7 @@ impl Module for Linear {
                         (rows, out_dim, in_dim),
                         out.as_mut_ptr(),
                         out_dim as isize,
-                        true,
+                        bias.is_some(),
                         View {
                             ptr: xs.as_ptr(),
                             rs: in_dim as isize,
