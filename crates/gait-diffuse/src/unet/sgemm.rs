@@ -1,11 +1,11 @@
 //! An f32 matrix product for x86-64 CPUs with AVX-512, the inner loop of the
-//! UNet's convolutions, projections and attention. On this project's AMD
-//! EPYC (Zen 4) machines the `gemm` crate reached about 30% of the FMA peak,
-//! half of what torch's MKL does (tools/diffuse/conv_bench.py); this is the
-//! classic packed layout (Goto & van de Geijn): panels of B and A are copied
-//! into the order an 8x32 register tile reads them, so the inner loop is one
-//! broadcast and two fused multiply-adds per row and step. Other CPUs keep
-//! `gemm` (see `cpu::matmul`).
+//! UNet's convolutions, linear layers and attention. On this project's AMD
+//! EPYC (Zen 4) machines the `gemm` crate reached 28 GFLOP/s per thread where
+//! torch's MKL reaches 33-49 (BENCHMARKS.md); this is the classic packed
+//! layout (Goto & van de Geijn): panels of B and A are copied into the order
+//! an 8x32 register tile reads them, so the inner loop is one broadcast and
+//! two fused multiply-adds per row and step. Other CPUs, and products
+//! narrower than 64, keep `gemm` (see `cpu::matmul`).
 
 use rayon::prelude::*;
 
