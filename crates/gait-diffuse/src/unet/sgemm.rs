@@ -170,94 +170,68 @@ unsafe fn blocks(
     }
 }
 
-/// Copies `rhs[pc..pc+kc, jc..jc+nc]` into NR-wide strips, `bp[strip][p][j]`,
-/// zero past column `nc`.
+/// Copies `rhs[pc..pc+kc, jc..jc+nc]` into NR-wide strips, `bp[strip][p][j]`.
 unsafe fn pack_b(bp: &mut [f32], rhs: View, pc: usize, kc: usize, jc: usize, nc: usize) {
-    for (s, strip) in bp
-        .chunks_exact_mut(kc * NR)
-        .take(nc.div_ceil(NR))
+    // SAFETY: forwarded.
+    unsafe { pack::<NR>(bp, rhs, pc, kc, jc, nc) }
+}
+
+/// Copies `lhs[ic..ic+mc, pc..pc+kc]` into MR-tall strips, `ap[strip][p][r]`:
+/// the same packing as B's, of A's transpose.
+unsafe fn pack_a(ap: &mut [f32], lhs: View, ic: usize, mc: usize, pc: usize, kc: usize) {
+    let lhs_t = View {
+        ptr: lhs.ptr,
+        rs: lhs.cs,
+        cs: lhs.rs,
+    };
+    // SAFETY: forwarded.
+    unsafe { pack::<MR>(ap, lhs_t, pc, kc, ic, mc) }
+}
+
+/// Copies the `kc x nc` block of `src` at `(p0, j0)` into strips `W` wide,
+/// `buf[strip][p][j]`, zero past column `nc`.
+///
+/// # Safety
+/// `src` must address the whole block.
+unsafe fn pack<const W: usize>(
+    buf: &mut [f32],
+    src: View,
+    p0: usize,
+    kc: usize,
+    j0: usize,
+    nc: usize,
+) {
+    for (s, strip) in buf
+        .chunks_exact_mut(kc * W)
+        .take(nc.div_ceil(W))
         .enumerate()
     {
-        let cols = NR.min(nc - s * NR);
-        // SAFETY: (pc + p, jc + s*NR + j) is inside rhs for p < kc, j < cols.
+        let cols = W.min(nc - s * W);
+        // SAFETY: (p0 + p, j0 + s*W + j) is inside src for p < kc, j < cols.
         let at = |p: usize, j: usize| unsafe {
-            rhs.ptr
-                .offset((pc + p) as isize * rhs.rs + (jc + s * NR + j) as isize * rhs.cs)
+            src.ptr
+                .offset((p0 + p) as isize * src.rs + (j0 + s * W + j) as isize * src.cs)
         };
-        if rhs.cs == 1 {
-            for (p, row) in strip.chunks_exact_mut(NR).enumerate() {
+        if src.cs == 1 {
+            for (p, row) in strip.chunks_exact_mut(W).enumerate() {
                 row[..cols].copy_from_slice(unsafe { std::slice::from_raw_parts(at(p, 0), cols) });
                 row[cols..].fill(0.0);
             }
-        } else if rhs.rs == 1 {
-            // Columns are contiguous (a transposed matrix): read down each one.
-            for j in 0..NR {
-                if j < cols {
-                    let col = unsafe { std::slice::from_raw_parts(at(0, j), kc) };
-                    for (p, v) in col.iter().enumerate() {
-                        strip[p * NR + j] = *v;
-                    }
-                } else {
-                    (0..kc).for_each(|p| strip[p * NR + j] = 0.0);
+        } else if src.rs == 1 && cols == W {
+            // Columns are contiguous: read the W of them side by side so the
+            // writes go in order.
+            let col: [&[f32]; W] =
+                std::array::from_fn(|j| unsafe { std::slice::from_raw_parts(at(0, j), kc) });
+            for (p, out) in strip.chunks_exact_mut(W).enumerate() {
+                for (o, c) in out.iter_mut().zip(&col) {
+                    *o = c[p];
                 }
             }
         } else {
-            for (p, row) in strip.chunks_exact_mut(NR).enumerate() {
-                for (j, v) in row.iter_mut().enumerate() {
-                    *v = if j < cols {
+            for (p, out) in strip.chunks_exact_mut(W).enumerate() {
+                for (j, o) in out.iter_mut().enumerate() {
+                    *o = if j < cols {
                         unsafe { at(p, j).read_unaligned() }
-                    } else {
-                        0.0
-                    };
-                }
-            }
-        }
-    }
-}
-
-/// Copies `lhs[ic..ic+mc, pc..pc+kc]` into MR-tall strips, `ap[strip][p][r]`,
-/// zero past row `mc`.
-unsafe fn pack_a(ap: &mut [f32], lhs: View, ic: usize, mc: usize, pc: usize, kc: usize) {
-    for (s, strip) in ap
-        .chunks_exact_mut(kc * MR)
-        .take(mc.div_ceil(MR))
-        .enumerate()
-    {
-        let rows = MR.min(mc - s * MR);
-        // SAFETY: (ic + s*MR + r, pc + p) is inside lhs for r < rows, p < kc.
-        let at = |r: usize, p: usize| unsafe {
-            lhs.ptr
-                .offset((ic + s * MR + r) as isize * lhs.rs + (pc + p) as isize * lhs.cs)
-        };
-        if lhs.cs == 1 && rows == MR {
-            // Rows are contiguous: read the MR rows side by side, write in order.
-            let src: [&[f32]; MR] =
-                std::array::from_fn(|r| unsafe { std::slice::from_raw_parts(at(r, 0), kc) });
-            for (p, out) in strip.chunks_exact_mut(MR).enumerate() {
-                for (o, row) in out.iter_mut().zip(&src) {
-                    *o = row[p];
-                }
-            }
-        } else if lhs.rs == 1 {
-            // Columns are contiguous: each step p is MR consecutive values.
-            for (p, out) in strip.chunks_exact_mut(MR).enumerate() {
-                if rows == MR {
-                    out.copy_from_slice(unsafe { std::slice::from_raw_parts(at(0, p), MR) });
-                } else {
-                    for (r, o) in out.iter_mut().enumerate() {
-                        *o = if r < rows {
-                            unsafe { at(r, p).read_unaligned() }
-                        } else {
-                            0.0
-                        };
-                    }
-                }
-            }
-        } else {
-            for (p, out) in strip.chunks_exact_mut(MR).enumerate() {
-                for (r, o) in out.iter_mut().enumerate() {
-                    *o = if r < rows {
-                        unsafe { at(r, p).read_unaligned() }
                     } else {
                         0.0
                     };
