@@ -146,7 +146,7 @@ impl ControlnetPipeline {
                 masked_latents,
             }) => {
                 let extra = Tensor::cat(&[mask, masked_latents], 1)?.to_dtype(self.dtype)?;
-                Some(Tensor::cat(&vec![&extra; copies], 0)?)
+                Some(per_guidance_row(&extra, guided)?)
             }
             _ => None,
         };
@@ -171,22 +171,13 @@ impl ControlnetPipeline {
             .broadcast_as((copies, b, n, d))?
             .reshape((copies * b, n, d))?
             .to_dtype(self.dtype)?;
-        let control = control.to_dtype(self.dtype)?;
-        let control = if guided {
-            Tensor::cat(&[&control, &control], 0)?
-        } else {
-            control
-        };
+        let control = per_guidance_row(&control.to_dtype(self.dtype)?, guided)?;
         let mut x = latents.to_dtype(self.dtype)?;
         let mut sched = Scheduler::new(p.scheduler, p.steps);
         let timesteps = sched.timesteps().get(begin..).unwrap_or_default().to_vec();
         sched.set_begin_index(begin);
         for (i, &t) in timesteps.iter().enumerate() {
-            let input = if guided {
-                Tensor::cat(&[&x, &x], 0)?
-            } else {
-                x.clone()
-            };
+            let input = per_guidance_row(&x, guided)?;
             let t = t as f64;
             let res = self
                 .models
@@ -212,5 +203,14 @@ impl ControlnetPipeline {
         let x = (x / self.models.vae_config().scaling_factor)?;
         let img = self.models.decode(&x)?;
         Ok(((img.to_dtype(DType::F32)? / 2.0)? + 0.5)?.clamp(0f32, 1f32)?)
+    }
+}
+
+/// `t` once per guidance half (unconditional, conditional) when `guided`.
+fn per_guidance_row(t: &Tensor, guided: bool) -> candle_core::Result<Tensor> {
+    if guided {
+        Tensor::cat(&[t, t], 0)
+    } else {
+        Ok(t.clone())
     }
 }

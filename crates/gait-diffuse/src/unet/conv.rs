@@ -233,9 +233,7 @@ impl Conv2d {
         })?;
         cpu::tensor(out, &[b, c_out, h, w])
     }
-}
 
-impl Conv2d {
     /// The 3x3 case of [`Conv2d::shifted`] by Winograd's F(2x2, 3x3)
     /// (shapes already checked).
     fn winograd(
@@ -297,7 +295,8 @@ mod tests {
     #[test]
     fn shifted_products_match_candle_conv_with_fused_terms() {
         let dev = Device::Cpu;
-        for (k, h, w) in [(3, 5, 7), (1, 4, 3), (3, 1, 1)] {
+        // 9x8 takes the Winograd path (at least WINOGRAD_MIN_PIXELS).
+        for (k, h, w) in [(3, 5, 7), (1, 4, 3), (3, 1, 1), (3, 9, 8)] {
             let c = conv(6, 5, k, 1, DType::F32);
             let x = Tensor::randn(0f32, 1.0, (2, 6, h, w), &dev).unwrap();
             let per = Tensor::randn(0f32, 1.0, (2, 5), &dev).unwrap();

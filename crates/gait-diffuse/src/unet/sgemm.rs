@@ -65,33 +65,25 @@ pub(crate) unsafe fn sgemm(
         // SAFETY: each part writes its own rows or columns of dst; the views
         // are offset inside the caller's extents.
         unsafe {
-            if split_n {
+            let (shape, dst, lhs, rhs) = if split_n {
                 let rhs = View {
                     ptr: rhs.ptr.offset(lo as isize * rhs.cs),
                     ..rhs
                 };
-                single(
-                    (m, hi - lo, k),
-                    dst.get().add(lo),
-                    dst_rs,
-                    accumulate,
-                    lhs,
-                    rhs,
-                );
+                ((m, hi - lo, k), dst.get().add(lo), lhs, rhs)
             } else {
                 let lhs = View {
                     ptr: lhs.ptr.offset(lo as isize * lhs.rs),
                     ..lhs
                 };
-                single(
+                (
                     (hi - lo, n, k),
                     dst.get().offset(lo as isize * dst_rs),
-                    dst_rs,
-                    accumulate,
                     lhs,
                     rhs,
-                );
-            }
+                )
+            };
+            single(shape, dst, dst_rs, accumulate, lhs, rhs);
         }
     };
     if parts == 1 {
@@ -117,63 +109,47 @@ unsafe fn single(
     let ap_len = kc_max * MC.min(m.div_ceil(MR) * MR);
     cpu::with_scratch(bp_len, |bp| {
         cpu::with_scratch(ap_len, |ap| {
-            // SAFETY: forwarded from the caller.
-            unsafe { blocks((m, n, k), dst, dst_rs, accumulate, lhs, rhs, bp, ap) }
-        })
-    })
-}
-
-/// The blocked loops of [`single`] over packed panels in `bp` and `ap`.
-#[allow(clippy::too_many_arguments)]
-unsafe fn blocks(
-    (m, n, k): (usize, usize, usize),
-    dst: *mut f32,
-    dst_rs: isize,
-    accumulate: bool,
-    lhs: View,
-    rhs: View,
-    bp: &mut [f32],
-    ap: &mut [f32],
-) {
-    for jc in (0..n).step_by(NC) {
-        let nc = NC.min(n - jc);
-        if k == 0 && !accumulate {
-            for i in 0..m {
-                // SAFETY: row i, columns jc..jc+nc of dst.
-                unsafe {
-                    std::slice::from_raw_parts_mut(dst.offset(i as isize * dst_rs).add(jc), nc)
+            for jc in (0..n).step_by(NC) {
+                let nc = NC.min(n - jc);
+                if k == 0 && !accumulate {
+                    for i in 0..m {
+                        // SAFETY: row i, columns jc..jc+nc of dst.
+                        unsafe {
+                            std::slice::from_raw_parts_mut(
+                                dst.offset(i as isize * dst_rs).add(jc),
+                                nc,
+                            )
+                        }
+                        .fill(0.0);
+                    }
                 }
-                .fill(0.0);
-            }
-        }
-        for pc in (0..k).step_by(KC) {
-            let kc = KC.min(k - pc);
-            // SAFETY: the caller's views cover k x n and m x k.
-            unsafe { pack_b(bp, rhs, pc, kc, jc, nc) };
-            for ic in (0..m).step_by(MC) {
-                let mc = MC.min(m - ic);
-                unsafe { pack_a(ap, lhs, ic, mc, pc, kc) };
-                let load = accumulate || pc > 0;
-                for jr in (0..nc).step_by(NR) {
-                    let b = &bp[jr * kc..];
-                    for ir in (0..mc).step_by(MR) {
-                        let a = &ap[ir * kc..];
-                        let c = unsafe { dst.offset((ic + ir) as isize * dst_rs).add(jc + jr) };
-                        let (rows, cols) = (MR.min(mc - ir), NR.min(nc - jr));
-                        // SAFETY: a and b hold kc full MR / NR strips (zero
-                        // padded); c addresses rows x cols of dst.
-                        unsafe { tile(kc, a.as_ptr(), b.as_ptr(), c, dst_rs, load, rows, cols) };
+                for pc in (0..k).step_by(KC) {
+                    let kc = KC.min(k - pc);
+                    // SAFETY: the caller's views cover k x n and m x k.
+                    unsafe { pack::<NR>(bp, rhs, pc, kc, jc, nc) };
+                    for ic in (0..m).step_by(MC) {
+                        let mc = MC.min(m - ic);
+                        unsafe { pack_a(ap, lhs, ic, mc, pc, kc) };
+                        let load = accumulate || pc > 0;
+                        for jr in (0..nc).step_by(NR) {
+                            let b = &bp[jr * kc..];
+                            for ir in (0..mc).step_by(MR) {
+                                let a = &ap[ir * kc..];
+                                let c =
+                                    unsafe { dst.offset((ic + ir) as isize * dst_rs).add(jc + jr) };
+                                let (rows, cols) = (MR.min(mc - ir), NR.min(nc - jr));
+                                // SAFETY: a and b hold kc full MR / NR strips (zero
+                                // padded); c addresses rows x cols of dst.
+                                unsafe {
+                                    tile(kc, a.as_ptr(), b.as_ptr(), c, dst_rs, load, rows, cols)
+                                };
+                            }
+                        }
                     }
                 }
             }
-        }
-    }
-}
-
-/// Copies `rhs[pc..pc+kc, jc..jc+nc]` into NR-wide strips, `bp[strip][p][j]`.
-unsafe fn pack_b(bp: &mut [f32], rhs: View, pc: usize, kc: usize, jc: usize, nc: usize) {
-    // SAFETY: forwarded.
-    unsafe { pack::<NR>(bp, rhs, pc, kc, jc, nc) }
+        })
+    })
 }
 
 /// Copies `lhs[ic..ic+mc, pc..pc+kc]` into MR-tall strips, `ap[strip][p][r]`:
@@ -189,7 +165,8 @@ unsafe fn pack_a(ap: &mut [f32], lhs: View, ic: usize, mc: usize, pc: usize, kc:
 }
 
 /// Copies the `kc x nc` block of `src` at `(p0, j0)` into strips `W` wide,
-/// `buf[strip][p][j]`, zero past column `nc`.
+/// `buf[strip][p][j]`, zero past column `nc` (B's panels directly, A's
+/// through [`pack_a`]).
 ///
 /// # Safety
 /// `src` must address the whole block.
