@@ -1,20 +1,24 @@
 //! `nn.Conv2d` with diffusers' tensor names (`weight`, `bias`). Stride-1
-//! 3x3 (padding 1) and 1x1 convolutions of f32 CPU tensors run as shifted
-//! matrix products over a zero-padded copy of each image (no im2col matrix),
-//! with the bias, a per-image bias (the ResNet's time embedding) and a
-//! residual written into the product's destination first, so they cost no
-//! extra pass; other convolutions go to candle's `conv2d`.
+//! 3x3 (padding 1) convolutions of f32 CPU tensors run by Winograd or as one
+//! im2col product, 1x1 ones as a product per image, with the bias, a
+//! per-image bias (the ResNet's time embedding) and a residual added in the
+//! same pass; other convolutions go to candle's `conv2d`.
 
 use candle_core::{Result, Tensor};
 use candle_nn::VarBuilder;
 
 use super::cpu::{self, View};
+use super::im2col;
 use super::winograd::{self, Start};
 
-/// Images at least this large take the Winograd path for 3x3 kernels (below
-/// it, SD's 8x8 level, the per-call weight transform outweighs the saved
-/// products: examples/conv_bench).
-const WINOGRAD_MIN_PIXELS: usize = 64;
+/// A 3x3 stride-1 padding-1 f32 convolution: `(x, (b, c_in, h, w), weight, c_out, start)`.
+type Conv3x3Kernel =
+    fn(&[f32], (usize, usize, usize, usize), &[f32], usize, &Start) -> Result<Vec<f32>>;
+
+/// Images at least this large take the Winograd path for 3x3 kernels; smaller
+/// ones (SD's 8x8 level) one im2col product, where the per-call weight
+/// transform would outweigh the saved products (examples/conv_bench).
+const WINOGRAD_MIN_PIXELS: usize = 256;
 
 /// A 2-D convolution (square kernel).
 #[derive(Debug, Clone)]
@@ -58,13 +62,13 @@ impl Conv2d {
         per_image: Option<&Tensor>,
         residual: Option<&Tensor>,
     ) -> Result<Tensor> {
-        let shifted = self.stride == 1 && 2 * self.padding + 1 == self.kernel && self.kernel <= 3;
+        let same_size = self.stride == 1 && 2 * self.padding + 1 == self.kernel && self.kernel <= 3;
         let all_f32 = cpu::is_cpu_f32(x)
             && cpu::is_cpu_f32(&self.weight)
             && per_image.is_none_or(cpu::is_cpu_f32)
             && residual.is_none_or(cpu::is_cpu_f32);
-        if shifted && all_f32 {
-            return self.shifted(x, per_image, residual);
+        if same_size && all_f32 {
+            return self.fast(x, per_image, residual);
         }
         let c_out = self.weight.dim(0)?;
         let y = x.conv2d(&self.weight, self.padding, self.stride, 1, 1)?;
@@ -78,7 +82,7 @@ impl Conv2d {
         }
     }
 
-    fn shifted(
+    fn fast(
         &self,
         x: &Tensor,
         per_image: Option<&Tensor>,
@@ -102,145 +106,77 @@ impl Conv2d {
                 r.dims()
             );
         }
-        let k = self.kernel;
-        if k == 3 && h * w >= WINOGRAD_MIN_PIXELS {
-            return self.winograd(x, per_image, residual);
+        if self.kernel == 3 {
+            let kernel = if h * w >= WINOGRAD_MIN_PIXELS {
+                winograd::conv3x3
+            } else {
+                im2col::conv3x3
+            };
+            return self.conv3x3(x, per_image, residual, kernel);
         }
-        let pad = self.padding;
-        let (wp, hp) = (w + 2 * pad, h + 2 * pad);
-        // Output columns run over the padded width; the last 2*pad of each row are dropped.
-        let n = h * wp;
-        // Per-channel stride of the padded copy: the last tap reads 2*pad past the image.
-        let plane = hp * wp + 2 * pad;
+        // 1x1: one product per image, into a destination holding the start terms.
         let mut out = vec![0f32; b * c_out * h * w];
-        cpu::with_f32(x, |xs| {
-            cpu::with_f32(&self.weight, |ws| {
-                cpu::with_f32(&self.bias, |bias| {
-                    let per = per_image.map(|p| p.flatten_all()).transpose()?;
-                    let res = residual.map(|r| r.flatten_all()).transpose()?;
-                    let per_v = per.as_ref().map(|p| p.to_vec1::<f32>()).transpose()?;
-                    let res_v = res.map(|r| r.contiguous()).transpose()?;
-                    let mut run = |res_s: Option<&[f32]>| -> Result<()> {
-                        let mut padded = vec![0f32; if pad > 0 { c_in * plane } else { 0 }];
-                        let mut acc = vec![0f32; if pad > 0 { c_out * n } else { 0 }];
-                        for i in 0..b {
+        let per_v = per_image
+            .map(|p| p.flatten_all()?.to_vec1::<f32>())
+            .transpose()?;
+        let run = |res: Option<&[f32]>, out: &mut [f32]| {
+            cpu::with_f32(x, |xs| {
+                cpu::with_f32(&self.weight, |ws| {
+                    cpu::with_f32(&self.bias, |bias| {
+                        for (i, dst_img) in out.chunks_exact_mut(c_out * h * w).enumerate() {
                             let img = &xs[i * c_in * h * w..(i + 1) * c_in * h * w];
-                            let dst_img = &mut out[i * c_out * h * w..(i + 1) * c_out * h * w];
-                            // Start value: bias + per-image bias + residual.
-                            let start = |co: usize| {
-                                bias[co] + per_v.as_ref().map_or(0.0, |p| p[i * c_out + co])
+                            for (co, row) in dst_img.chunks_exact_mut(h * w).enumerate() {
+                                let s =
+                                    bias[co] + per_v.as_ref().map_or(0.0, |p| p[i * c_out + co]);
+                                match res {
+                                    Some(r) => {
+                                        let r = &r[(i * c_out + co) * h * w..][..h * w];
+                                        row.iter_mut().zip(r).for_each(|(d, r)| *d = s + r)
+                                    }
+                                    None => row.fill(s),
+                                }
+                            }
+                            // SAFETY: weight (c_out x c_in), image (c_in x hw), dst (c_out x hw).
+                            unsafe {
+                                cpu::matmul(
+                                    (c_out, h * w, c_in),
+                                    dst_img.as_mut_ptr(),
+                                    (h * w) as isize,
+                                    true,
+                                    View {
+                                        ptr: ws.as_ptr(),
+                                        rs: c_in as isize,
+                                        cs: 1,
+                                    },
+                                    View {
+                                        ptr: img.as_ptr(),
+                                        rs: (h * w) as isize,
+                                        cs: 1,
+                                    },
+                                    true,
+                                )
                             };
-                            let res_img =
-                                res_s.map(|r| &r[i * c_out * h * w..(i + 1) * c_out * h * w]);
-                            if pad == 0 {
-                                for co in 0..c_out {
-                                    let s = start(co);
-                                    let row = &mut dst_img[co * h * w..(co + 1) * h * w];
-                                    match res_img {
-                                        Some(r) => row
-                                            .iter_mut()
-                                            .zip(&r[co * h * w..(co + 1) * h * w])
-                                            .for_each(|(d, r)| *d = s + r),
-                                        None => row.fill(s),
-                                    }
-                                }
-                                // SAFETY: weight (c_out x c_in), image (c_in x hw), dst (c_out x hw).
-                                unsafe {
-                                    cpu::matmul(
-                                        (c_out, h * w, c_in),
-                                        dst_img.as_mut_ptr(),
-                                        (h * w) as isize,
-                                        true,
-                                        View {
-                                            ptr: ws.as_ptr(),
-                                            rs: c_in as isize,
-                                            cs: 1,
-                                        },
-                                        View {
-                                            ptr: img.as_ptr(),
-                                            rs: (h * w) as isize,
-                                            cs: 1,
-                                        },
-                                        true,
-                                    )
-                                };
-                                continue;
-                            }
-                            for ci in 0..c_in {
-                                for y in 0..h {
-                                    let src = &img[(ci * h + y) * w..(ci * h + y + 1) * w];
-                                    let o = ci * plane + (y + pad) * wp + pad;
-                                    padded[o..o + w].copy_from_slice(src);
-                                }
-                            }
-                            for co in 0..c_out {
-                                let s = start(co);
-                                for y in 0..h {
-                                    let row = &mut acc[co * n + y * wp..co * n + y * wp + w];
-                                    match res_img {
-                                        Some(r) => {
-                                            let rr = &r[(co * h + y) * w..(co * h + y + 1) * w];
-                                            row.iter_mut().zip(rr).for_each(|(d, r)| *d = s + r)
-                                        }
-                                        None => row.fill(s),
-                                    }
-                                }
-                            }
-                            for ky in 0..k {
-                                for kx in 0..k {
-                                    let tap = ky * k + kx;
-                                    // SAFETY: the weight view (c_out x c_in) steps k*k per input
-                                    // channel; the image view (c_in x n) starts at the tap's
-                                    // offset and ends at most 2*pad past the padded plane,
-                                    // inside `plane`; acc is c_out x n.
-                                    unsafe {
-                                        cpu::matmul(
-                                            (c_out, n, c_in),
-                                            acc.as_mut_ptr(),
-                                            n as isize,
-                                            true,
-                                            View {
-                                                ptr: ws.as_ptr().add(tap),
-                                                rs: (c_in * k * k) as isize,
-                                                cs: (k * k) as isize,
-                                            },
-                                            View {
-                                                ptr: padded.as_ptr().add(ky * wp + kx),
-                                                rs: plane as isize,
-                                                cs: 1,
-                                            },
-                                            true,
-                                        )
-                                    };
-                                }
-                            }
-                            for co in 0..c_out {
-                                for y in 0..h {
-                                    let src = &acc[co * n + y * wp..co * n + y * wp + w];
-                                    dst_img[(co * h + y) * w..(co * h + y + 1) * w]
-                                        .copy_from_slice(src);
-                                }
-                            }
                         }
                         Ok(())
-                    };
-                    match &res_v {
-                        Some(r) => cpu::with_f32(r, |rs| run(Some(rs))),
-                        None => run(None),
-                    }
+                    })
                 })
             })
-        })?;
+        };
+        match residual {
+            Some(r) => cpu::with_f32(r, |rs| run(Some(rs), &mut out))?,
+            None => run(None, &mut out)?,
+        }
         cpu::tensor(out, &[b, c_out, h, w])
     }
 
-    /// The 3x3 case of [`Conv2d::shifted`] by Winograd's F(2x2, 3x3)
-    /// (shapes already checked).
-    fn winograd(
+    /// The 3x3 case of [`Conv2d::fast`] through `kernel` (Winograd or
+    /// im2col; shapes already checked).
+    fn conv3x3(
         &self,
         x: &Tensor,
         per_image: Option<&Tensor>,
         residual: Option<&Tensor>,
+        kernel: Conv3x3Kernel,
     ) -> Result<Tensor> {
         let (b, c_in, h, w) = x.dims4()?;
         let c_out = self.weight.dim(0)?;
@@ -256,7 +192,7 @@ impl Conv2d {
                             per_image: per_v.as_deref(),
                             residual: res,
                         };
-                        winograd::conv3x3(xs, (b, c_in, h, w), ws, c_out, &start)
+                        kernel(xs, (b, c_in, h, w), ws, c_out, &start)
                     })
                 })
             })
@@ -293,10 +229,10 @@ mod tests {
     }
 
     #[test]
-    fn shifted_products_match_candle_conv_with_fused_terms() {
+    fn fast_paths_match_candle_conv_with_fused_terms() {
         let dev = Device::Cpu;
-        // 9x8 takes the Winograd path (at least WINOGRAD_MIN_PIXELS).
-        for (k, h, w) in [(3, 5, 7), (1, 4, 3), (3, 1, 1), (3, 9, 8)] {
+        // 16x17 takes the Winograd path (at least WINOGRAD_MIN_PIXELS), the other 3x3s im2col.
+        for (k, h, w) in [(3, 5, 7), (1, 4, 3), (3, 1, 1), (3, 16, 17)] {
             let c = conv(6, 5, k, 1, DType::F32);
             let x = Tensor::randn(0f32, 1.0, (2, 6, h, w), &dev).unwrap();
             let per = Tensor::randn(0f32, 1.0, (2, 5), &dev).unwrap();

@@ -1,7 +1,7 @@
 //! Our SD UNet and its building blocks, with diffusers' structure and tensor
 //! names so the real checkpoints load unchanged, numerically as diffusers
 //! (exact erf GELU in the feed-forward), and with fused CPU kernels for the
-//! hot spots (convolutions as shifted matrix products, attention without a
+//! hot spots (convolutions by Winograd or im2col products, attention without a
 //! score tensor, GroupNorm + SiLU in one pass).
 
 mod attention;
@@ -10,6 +10,7 @@ mod conv;
 mod cpu;
 mod embeddings;
 pub(crate) mod encoder;
+mod im2col;
 mod linear;
 mod model;
 mod norm;

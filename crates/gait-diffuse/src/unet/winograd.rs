@@ -71,43 +71,56 @@ pub(crate) fn conv3x3(
 
 /// `U = G g G^T` for every channel pair, as 16 matrices `(c_out, c_in)` in `u`.
 /// Per output channel the 9 taps are first laid out along the input channels,
-/// so the transform runs over contiguous rows and writes 16 contiguous rows.
+/// so both passes of G run over contiguous rows (and vectorise) and write 16
+/// contiguous rows.
 fn transform_weights(weight: &[f32], c_out: usize, c_in: usize, u: &mut [f32]) {
     let dst = SharedMut(u.as_mut_ptr());
     (0..c_out).into_par_iter().for_each_init(
-        || vec![0f32; 9 * c_in],
-        |taps, co| {
-            for ci in 0..c_in {
-                let g = &weight[(co * c_in + ci) * 9..][..9];
-                for (t, v) in g.iter().enumerate() {
+        || vec![0f32; 12 * c_in],
+        |work, co| {
+            let (taps, gg) = work.split_at_mut(9 * c_in);
+            let g = &weight[co * c_in * 9..(co + 1) * c_in * 9];
+            for (ci, k) in g.chunks_exact(9).enumerate() {
+                for (t, v) in k.iter().enumerate() {
                     taps[t * c_in + ci] = *v;
                 }
             }
-            let tap = |ky: usize, kx: usize| &taps[(ky * 3 + kx) * c_in..][..c_in];
-            // SAFETY: row (xi, co) of U is written by this task only.
-            let row = |xi: usize| unsafe {
-                std::slice::from_raw_parts_mut(dst.get().add((xi * c_out + co) * c_in), c_in)
-            };
+            let tap = |t: usize| &taps[t * c_in..(t + 1) * c_in];
             for r in 0..4 {
-                let (o0, o1, o2, o3) = (row(r * 4), row(r * 4 + 1), row(r * 4 + 2), row(r * 4 + 3));
-                for ci in 0..c_in {
-                    // Row r of G g, one value per kernel column, then G along the row.
-                    let gg = |kx: usize| g_times(tap(0, kx)[ci], tap(1, kx)[ci], tap(2, kx)[ci])[r];
-                    let [u0, u1, u2, u3] = g_times(gg(0), gg(1), gg(2));
-                    o0[ci] = u0;
-                    o1[ci] = u1;
-                    o2[ci] = u2;
-                    o3[ci] = u3;
+                // Row r of G g: one row of c_in values per kernel column.
+                for kx in 0..3 {
+                    let out = &mut gg[kx * c_in..(kx + 1) * c_in];
+                    g_row(r, tap(kx), tap(3 + kx), tap(6 + kx), out);
+                }
+                let (g0, rest) = gg.split_at(c_in);
+                let (g1, g2) = rest.split_at(c_in);
+                for s in 0..4 {
+                    // SAFETY: row (r * 4 + s, co) of U is written by this task only.
+                    let out = unsafe {
+                        std::slice::from_raw_parts_mut(
+                            dst.get().add(((r * 4 + s) * c_out + co) * c_in),
+                            c_in,
+                        )
+                    };
+                    g_row(s, g0, g1, g2, out);
                 }
             }
         },
     );
 }
 
-/// `G (a, b, c)^T` for G = [[1,0,0],[1/2,1/2,1/2],[1/2,-1/2,1/2],[0,0,1]].
+/// Row `r` of `G (a, b, c)^T`, element-wise over the slices, for
+/// G = [[1,0,0],[1/2,1/2,1/2],[1/2,-1/2,1/2],[0,0,1]].
 #[inline(always)]
-fn g_times(a: f32, b: f32, c: f32) -> [f32; 4] {
-    [a, 0.5 * (a + b + c), 0.5 * (a - b + c), c]
+fn g_row(r: usize, a: &[f32], b: &[f32], c: &[f32], out: &mut [f32]) {
+    let n = out.len();
+    let (a, b, c) = (&a[..n], &b[..n], &c[..n]);
+    match r {
+        0 => out.copy_from_slice(a),
+        1 => (0..n).for_each(|i| out[i] = 0.5 * (a[i] + b[i] + c[i])),
+        2 => (0..n).for_each(|i| out[i] = 0.5 * (a[i] - b[i] + c[i])),
+        _ => out.copy_from_slice(c),
+    }
 }
 
 /// `V = B^T d B` for every 4x4 input patch (tile stride 2, zero padding 1),
@@ -224,11 +237,11 @@ fn transform_output(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Direct 3x3 convolution in f64 (the definition).
-    fn direct(
+    pub(crate) fn direct(
         x: &[f32],
         (b, ci, h, w): (usize, usize, usize, usize),
         wt: &[f32],
@@ -260,7 +273,7 @@ mod tests {
         out
     }
 
-    fn values(n: usize, seed: u32) -> Vec<f32> {
+    pub(crate) fn values(n: usize, seed: u32) -> Vec<f32> {
         // A small deterministic pseudo-random sequence in [-1, 1).
         let mut s = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
         (0..n)
