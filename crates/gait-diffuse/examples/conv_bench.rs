@@ -1,6 +1,7 @@
 //! Throughput of gait-diffuse's 3x3 convolution (the UNet's ResNet convs), of
 //! its linear layer and of candle's own linear layer (the `gemm` crate) at
-//! SD 1.5's shapes, in GFLOP/s (best of 5). Pair it with
+//! SD 1.5's shapes, in GFLOP/s (best of 5), and the time of its attention
+//! layer (projections included). Pair it with
 //! tools/diffuse/conv_bench.py, which times torch on the same shapes.
 
 use std::collections::HashMap;
@@ -9,7 +10,7 @@ use std::time::Instant;
 use candle_core::Module;
 use candle_core::{DType, Device, Tensor};
 use candle_nn::VarBuilder;
-use gait_diffuse::unet::{conv2d, linear_no_bias};
+use gait_diffuse::unet::{Attention, conv2d, linear_no_bias};
 
 fn best(mut f: impl FnMut()) -> f64 {
     f();
@@ -69,6 +70,40 @@ fn main() -> candle_core::Result<()> {
         println!(
             "linear {m}x{k}x{n} (candle_nn): {:.1} GFLOP/s ({:.1} ms)",
             flop / s / 1e9,
+            s * 1e3
+        );
+    }
+    // Self-attention at the first two levels, cross-attention over 77 tokens.
+    for (n, c, m, ctx_c) in [
+        (4096, 320, 4096, 320),
+        (1024, 640, 1024, 640),
+        (4096, 320, 77, 768),
+    ] {
+        let mut w = HashMap::new();
+        for (name, k) in [
+            ("to_q", c),
+            ("to_k", ctx_c),
+            ("to_v", ctx_c),
+            ("to_out.0", c),
+        ] {
+            w.insert(
+                format!("{name}.weight"),
+                Tensor::randn(0f32, 0.05, (c, k), &dev)?,
+            );
+        }
+        w.insert(
+            "to_out.0.bias".to_string(),
+            Tensor::zeros(c, DType::F32, &dev)?,
+        );
+        let attn = Attention::new(VarBuilder::from_tensors(w, DType::F32, &dev), c, ctx_c, 8)?;
+        let x = Tensor::randn(0f32, 1.0, (2, n, c), &dev)?;
+        let ctx = Tensor::randn(0f32, 1.0, (2, m, ctx_c), &dev)?;
+        let cross = (m != n).then_some(&ctx);
+        let s = best(|| {
+            attn.forward(&x, cross).unwrap();
+        });
+        println!(
+            "attention b2 {n}x{c} over {m}x{ctx_c}, 8 heads: {:.1} ms",
             s * 1e3
         );
     }

@@ -1,10 +1,9 @@
 //! diffusers' `Attention` (`to_q`, `to_k`, `to_v` without bias, `to_out.0`):
 //! multi-head scaled dot-product attention over tokens `(B, N, C)`, self- or
-//! cross- (keys and values from the text context). On f32 CPU tensors the
-//! heads are read in place from the projections (no transposes) and each
-//! block of query rows goes through scores, softmax and values while its
-//! scores are still in cache, so the `(B, heads, N, M)` score tensor never
-//! exists; elsewhere candle's ops.
+//! cross- (keys and values from the text context). On f32 CPU tensors each
+//! block of queries goes through scores, softmax and values while its scores
+//! are still in cache, so the `(B, heads, N, M)` score tensor never exists;
+//! elsewhere candle's ops.
 
 use candle_core::{D, Module, Result, Tensor};
 use candle_nn::VarBuilder;
@@ -12,10 +11,11 @@ use rayon::prelude::*;
 
 use super::cpu::{self, SharedMut, View};
 use super::linear::{Linear, linear, linear_no_bias};
+use super::sgemm::{self, MR, NR};
 
-/// Query rows per task of the fused kernel: 64 rows of 4096 f32 scores
-/// (SD 1.5's 64x64 latents) are 1 MiB.
-const ROWS: usize = 64;
+/// Queries per task of the fused kernel (two register-tile strips): their
+/// scores against SD 1.5's 4096 latent pixels are 1 MiB.
+const QUERIES: usize = 2 * NR;
 
 /// Multi-head attention.
 #[derive(Debug, Clone)]
@@ -72,7 +72,13 @@ fn reference(q: &Tensor, k: &Tensor, v: &Tensor, heads: usize) -> Result<Tensor>
     p.matmul(&v)?.transpose(1, 2)?.reshape((b, n, c))
 }
 
-/// The fused CPU kernel: tasks of (image, head, block of query rows).
+/// The fused CPU kernel, on the packed 8x32 register tile of `sgemm`.
+/// Per (image, head), K and V are packed once into the tile's A strips; per
+/// block of [`QUERIES`] queries the scores are computed transposed
+/// (`S^T = K Q^T`, keys down, queries across), so the softmax over keys runs
+/// down columns with whole vectors of queries, and `S^T` already is the
+/// packed B operand of `O^T = V^T P^T`: no copy or transpose of the scores.
+/// The 1/sum of the softmax is applied to the d-wide outputs, not the scores.
 fn fused(q: &Tensor, k: &Tensor, v: &Tensor, heads: usize) -> Result<Tensor> {
     let (b, n, c) = q.dims3()?;
     let (kb, m, kc) = k.dims3()?;
@@ -86,180 +92,184 @@ fn fused(q: &Tensor, k: &Tensor, v: &Tensor, heads: usize) -> Result<Tensor> {
     }
     let d = c / heads;
     let scale = (1.0 / (d as f64).sqrt()) as f32;
-    let mut out = vec![0f32; b * n * c];
-    let dst = SharedMut(out.as_mut_ptr());
-    let blocks = n.div_ceil(ROWS);
-    // K^T per image and head, (d, m) row-major: every block of query rows
-    // reads it, and the matrix product copies contiguous rows far faster
-    // than it gathers a transposed view.
-    let mut kt = vec![0f32; b * m * c];
+    // Strips are zero-padded to whole tiles.
+    let (m_pad, d_pad) = (m.div_ceil(MR) * MR, d.div_ceil(MR) * MR);
+    let per_head = m_pad * d + d_pad * m;
+    let mut packed = vec![0f32; b * heads * per_head];
     cpu::with_f32(k, |ks| {
-        let dst = SharedMut(kt.as_mut_ptr());
-        (0..b * heads).into_par_iter().for_each(|task| {
-            let (img, h) = (task / heads, task % heads);
-            // SAFETY: task (img, h) writes only its own d x m block.
-            let out = unsafe { std::slice::from_raw_parts_mut(dst.get().add(task * d * m), d * m) };
-            // In blocks of 16 tokens, so their rows stay in L1 while each
-            // channel's 16 values are written side by side.
-            for t0 in (0..m).step_by(16) {
-                let t1 = (t0 + 16).min(m);
-                for e in 0..d {
-                    let col = &mut out[e * m + t0..e * m + t1];
-                    for (t, o) in (t0..t1).zip(col) {
-                        *o = ks[(img * m + t) * c + h * d + e];
-                    }
-                }
-            }
-        });
-        Ok(())
-    })?;
-    cpu::with_f32(q, |qs| {
-        let ks = &kt;
         cpu::with_f32(v, |vs| {
-            (0..b * heads * blocks).into_par_iter().for_each_init(
-                || vec![0f32; ROWS * m],
-                |scores, task| {
-                    let (img, rest) = (task / (heads * blocks), task % (heads * blocks));
-                    let (h, blk) = (rest / blocks, rest % blocks);
-                    let r0 = blk * ROWS;
-                    let rows = ROWS.min(n - r0);
-                    let q0 = (img * n + r0) * c + h * d;
-                    let kv0 = img * m * c + h * d;
-                    // SAFETY: the views stay inside q (rows x d from row r0),
-                    // kt (head h's d x m block of image img), v (m tokens
-                    // of image img, head h's d columns),
-                    // and each task writes only its rows x d block of out.
+            packed
+                .par_chunks_mut(per_head)
+                .enumerate()
+                .for_each(|(task, buf)| {
+                    let (img, h) = (task / heads, task % heads);
+                    let (kp, vp) = buf.split_at_mut(m_pad * d);
+                    let at = img * m * c + h * d;
+                    // SAFETY: head h's d columns of the m tokens of image img.
                     unsafe {
-                        cpu::matmul(
-                            (rows, m, d),
-                            scores.as_mut_ptr(),
-                            m as isize,
-                            false,
-                            View {
-                                ptr: qs.as_ptr().add(q0),
-                                rs: c as isize,
-                                cs: 1,
-                            },
-                            View {
-                                ptr: ks.as_ptr().add((img * heads + h) * d * m),
-                                rs: m as isize,
-                                cs: 1,
-                            },
-                            false,
-                        );
+                        // A of S^T = K Q^T: strips of MR keys, d deep.
+                        let k_t = View {
+                            ptr: ks.as_ptr().add(at),
+                            rs: 1,
+                            cs: c as isize,
+                        };
+                        sgemm::pack::<MR>(kp, k_t, 0, d, 0, m);
+                        // A of O^T = V^T P^T: strips of MR channels, m deep.
+                        let v_rows = View {
+                            ptr: vs.as_ptr().add(at),
+                            rs: c as isize,
+                            cs: 1,
+                        };
+                        sgemm::pack::<MR>(vp, v_rows, 0, m, 0, d);
                     }
-                    for row in scores[..rows * m].chunks_exact_mut(m) {
-                        softmax_row(row, scale);
-                    }
-                    // SAFETY: as above.
-                    unsafe {
-                        cpu::matmul(
-                            (rows, d, m),
-                            dst.get().add(q0),
-                            c as isize,
-                            false,
-                            View {
-                                ptr: scores.as_ptr(),
-                                rs: m as isize,
-                                cs: 1,
-                            },
-                            View {
-                                ptr: vs.as_ptr().add(kv0),
-                                rs: c as isize,
-                                cs: 1,
-                            },
-                            false,
-                        );
-                    }
-                },
-            );
+                });
             Ok(())
         })
+    })?;
+    let mut out = vec![0f32; b * n * c];
+    let dst = SharedMut(out.as_mut_ptr());
+    let blocks = n.div_ceil(QUERIES);
+    cpu::with_f32(q, |qs| {
+        (0..b * heads * blocks).into_par_iter().for_each(|task| {
+            let (img, rest) = (task / (heads * blocks), task % (heads * blocks));
+            let (h, blk) = (rest / blocks, rest % blocks);
+            let r0 = blk * QUERIES;
+            let nq = QUERIES.min(n - r0);
+            let (kp, vp) = packed[(img * heads + h) * per_head..][..per_head].split_at(m_pad * d);
+            cpu::with_scratch(QUERIES * (d + m + d_pad) + QUERIES, |work| {
+                let (qp, rest) = work.split_at_mut(QUERIES * d);
+                let (st, rest) = rest.split_at_mut(QUERIES * m);
+                let (ot, inv) = rest.split_at_mut(QUERIES * d_pad);
+                let strips = nq.div_ceil(NR);
+                // SAFETY: the views stay inside q (nq rows of head h's d
+                // columns from row r0), the packed strips hold whole tiles,
+                // and each tile writes inside st / ot.
+                unsafe {
+                    let q_t = View {
+                        ptr: qs.as_ptr().add((img * n + r0) * c + h * d),
+                        rs: 1,
+                        cs: c as isize,
+                    };
+                    sgemm::pack::<NR>(qp, q_t, 0, d, 0, nq);
+                    for t in 0..m.div_ceil(MR) {
+                        for s in 0..strips {
+                            sgemm::tile(
+                                d,
+                                kp.as_ptr().add(t * MR * d),
+                                qp.as_ptr().add(s * NR * d),
+                                st.as_mut_ptr().add(s * NR * m + t * MR * NR),
+                                NR as isize,
+                                false,
+                                MR.min(m - t * MR),
+                                NR.min(nq - s * NR),
+                            );
+                        }
+                    }
+                }
+                for (s, inv) in inv.chunks_exact_mut(NR).take(strips).enumerate() {
+                    softmax_columns(&mut st[s * NR * m..(s + 1) * NR * m], scale, inv);
+                }
+                // SAFETY: as above.
+                unsafe {
+                    for t in 0..d.div_ceil(MR) {
+                        for s in 0..strips {
+                            sgemm::tile(
+                                m,
+                                vp.as_ptr().add(t * MR * m),
+                                st.as_ptr().add(s * NR * m),
+                                ot.as_mut_ptr().add(t * MR * QUERIES + s * NR),
+                                QUERIES as isize,
+                                false,
+                                MR.min(d - t * MR),
+                                NR.min(nq - s * NR),
+                            );
+                        }
+                    }
+                }
+                for j in 0..nq {
+                    // SAFETY: query r0 + j's d channels of head h belong to this task only.
+                    let row = unsafe {
+                        std::slice::from_raw_parts_mut(
+                            dst.get().add((img * n + r0 + j) * c + h * d),
+                            d,
+                        )
+                    };
+                    for (e, o) in row.iter_mut().enumerate() {
+                        *o = ot[e * QUERIES + j] * inv[j];
+                    }
+                }
+            });
+        });
+        Ok(())
     })?;
     cpu::tensor(out, &[b, n, c])
 }
 
-/// In place: softmax(scale * row).
-fn softmax_row(row: &mut [f32], scale: f32) {
+/// Softmax over the rows of `st` (keys x NR queries, row-major), column by
+/// column, of `scale * st`; leaves the exponentials in `st` and writes each
+/// column's 1 / sum to `inv`.
+fn softmax_columns(st: &mut [f32], scale: f32, inv: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
-    if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-        // SAFETY: the features were just detected.
-        return unsafe { softmax_row_avx2(row, scale) };
+    if is_x86_feature_detected!("avx512f") && inv.len() >= NR {
+        // SAFETY: the feature was just detected.
+        return unsafe { softmax_columns_avx512(st, scale, inv) };
     }
-    softmax_row_portable(row, scale)
+    softmax_columns_body(st, scale, inv)
 }
 
-/// The same with AVX2 intrinsics (the compiler would not vectorise `exp`).
+/// The same with AVX-512 intrinsics (the compiler does not vectorise `exp`).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn softmax_row_avx2(row: &mut [f32], scale: f32) {
+#[target_feature(enable = "avx512f")]
+unsafe fn softmax_columns_avx512(st: &mut [f32], scale: f32, inv: &mut [f32]) {
     use std::arch::x86_64::*;
-    let n8 = row.len() / 8 * 8;
-    let p = row.as_mut_ptr();
-    // SAFETY: every load/store below is at i + 8 <= n8 <= row.len().
+    let rows = st.len() / NR;
+    let p = st.as_mut_ptr();
+    // SAFETY: every access is inside the rows x NR values of st (NR = 32).
     unsafe {
-        let mut vmax = _mm256_set1_ps(f32::NEG_INFINITY);
-        for i in (0..n8).step_by(8) {
-            vmax = _mm256_max_ps(vmax, _mm256_loadu_ps(p.add(i)));
+        let (mut m0, mut m1) = (
+            _mm512_set1_ps(f32::NEG_INFINITY),
+            _mm512_set1_ps(f32::NEG_INFINITY),
+        );
+        for r in 0..rows {
+            m0 = _mm512_max_ps(m0, _mm512_loadu_ps(p.add(r * NR)));
+            m1 = _mm512_max_ps(m1, _mm512_loadu_ps(p.add(r * NR + 16)));
         }
-        let mut lanes = [0f32; 8];
-        _mm256_storeu_ps(lanes.as_mut_ptr(), vmax);
-        let mx = row[n8..]
-            .iter()
-            .chain(&lanes)
-            .fold(f32::NEG_INFINITY, |a, &v| a.max(v));
-        let shift = _mm256_set1_ps(mx * scale);
-        let vscale = _mm256_set1_ps(scale);
-        let mut vsum = _mm256_setzero_ps();
-        for i in (0..n8).step_by(8) {
-            let x = _mm256_fmsub_ps(_mm256_loadu_ps(p.add(i)), vscale, shift);
-            let e = cpu::exp_avx2(x);
-            _mm256_storeu_ps(p.add(i), e);
-            vsum = _mm256_add_ps(vsum, e);
+        let vs = _mm512_set1_ps(scale);
+        let (s0, s1) = (_mm512_mul_ps(m0, vs), _mm512_mul_ps(m1, vs));
+        let (mut a0, mut a1) = (_mm512_setzero_ps(), _mm512_setzero_ps());
+        for r in 0..rows {
+            let (q0, q1) = (p.add(r * NR), p.add(r * NR + 16));
+            let e0 = cpu::exp_avx512(_mm512_fmsub_ps(_mm512_loadu_ps(q0), vs, s0));
+            let e1 = cpu::exp_avx512(_mm512_fmsub_ps(_mm512_loadu_ps(q1), vs, s1));
+            _mm512_storeu_ps(q0, e0);
+            _mm512_storeu_ps(q1, e1);
+            a0 = _mm512_add_ps(a0, e0);
+            a1 = _mm512_add_ps(a1, e1);
         }
-        _mm256_storeu_ps(lanes.as_mut_ptr(), vsum);
-        let mut total: f32 = lanes.iter().sum();
-        for v in &mut row[n8..] {
-            *v = cpu::exp(*v * scale - mx * scale);
-            total += *v;
-        }
-        let inv = _mm256_set1_ps(1.0 / total);
-        for i in (0..n8).step_by(8) {
-            _mm256_storeu_ps(p.add(i), _mm256_mul_ps(_mm256_loadu_ps(p.add(i)), inv));
-        }
-        for v in &mut row[n8..] {
-            *v *= 1.0 / total;
-        }
+        let one = _mm512_set1_ps(1.0);
+        _mm512_storeu_ps(inv.as_mut_ptr(), _mm512_div_ps(one, a0));
+        _mm512_storeu_ps(inv.as_mut_ptr().add(16), _mm512_div_ps(one, a1));
     }
 }
 
-fn softmax_row_portable(row: &mut [f32], scale: f32) {
-    let mut max = [f32::NEG_INFINITY; 8];
-    let mut chunks = row.chunks_exact(8);
-    for ch in &mut chunks {
-        for (m, &v) in max.iter_mut().zip(ch) {
+fn softmax_columns_body(st: &mut [f32], scale: f32, inv: &mut [f32]) {
+    let mut max = [f32::NEG_INFINITY; NR];
+    for row in st.chunks_exact(NR) {
+        for (m, &v) in max.iter_mut().zip(row) {
             *m = if v > *m { v } else { *m };
         }
     }
-    let mut mx = chunks
-        .remainder()
-        .iter()
-        .fold(f32::NEG_INFINITY, |a, &v| a.max(v));
-    mx = max.iter().fold(mx, |a, &v| a.max(v));
-    let shift = mx * scale;
-    row.iter_mut()
-        .for_each(|v| *v = cpu::exp(*v * scale - shift));
-    let mut sum = [0f32; 8];
-    let chunks = row.chunks_exact(8);
-    let mut total: f32 = chunks.remainder().iter().sum();
-    for ch in chunks {
-        for (s, &v) in sum.iter_mut().zip(ch) {
-            *s += v;
+    let shift = max.map(|m| m * scale);
+    let mut sum = [0f32; NR];
+    for row in st.chunks_exact_mut(NR) {
+        for ((v, s), sh) in row.iter_mut().zip(&mut sum).zip(&shift) {
+            *v = cpu::exp(*v * scale - sh);
+            *s += *v;
         }
     }
-    total += sum.iter().sum::<f32>();
-    let inv = 1.0 / total;
-    row.iter_mut().for_each(|v| *v *= inv);
+    for (i, s) in inv.iter_mut().zip(sum) {
+        *i = 1.0 / s;
+    }
 }
 
 #[cfg(test)]
@@ -271,13 +281,20 @@ mod tests {
     #[test]
     fn fused_kernel_matches_candle_ops() {
         let dev = Device::Cpu;
-        // 150 queries: two full row blocks and a partial one; 77 keys (a text context).
-        for (n, m) in [(150, 77), (9, 9), (70, 300)] {
-            let q = (Tensor::randn(0f32, 1.0, (2, n, 12), &dev).unwrap() * 2.0).unwrap();
-            let k = (Tensor::randn(0f32, 1.0, (2, m, 12), &dev).unwrap() * 2.0).unwrap();
-            let v = Tensor::randn(0f32, 1.0, (2, m, 12), &dev).unwrap();
-            let a = fused(&q, &k, &v, 3).unwrap();
-            let r = reference(&q, &k, &v, 3).unwrap();
+        // 150 queries: two full blocks and a partial one (a partial tile
+        // strip); 77 keys (a text context, a partial key strip); 4-wide heads
+        // (one partial channel strip) and 40-wide ones (SD 1.5's first level).
+        for (n, m, c, heads) in [
+            (150, 77, 12, 3),
+            (9, 9, 12, 3),
+            (70, 300, 12, 3),
+            (130, 200, 80, 2),
+        ] {
+            let q = (Tensor::randn(0f32, 1.0, (2, n, c), &dev).unwrap() * 2.0).unwrap();
+            let k = (Tensor::randn(0f32, 1.0, (2, m, c), &dev).unwrap() * 2.0).unwrap();
+            let v = Tensor::randn(0f32, 1.0, (2, m, c), &dev).unwrap();
+            let a = fused(&q, &k, &v, heads).unwrap();
+            let r = reference(&q, &k, &v, heads).unwrap();
             let d = (a - r)
                 .unwrap()
                 .abs()

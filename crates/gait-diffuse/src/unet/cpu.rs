@@ -134,19 +134,23 @@ pub(crate) fn exp(x: f32) -> f32 {
     y * f32::from_bits(((e + 127) << 23) as u32)
 }
 
-/// [`exp`] on 8 lanes.
+/// [`exp`] on 16 lanes.
 ///
 /// # Safety
-/// The CPU must have AVX2 and FMA.
+/// The CPU must have AVX-512F.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-pub(crate) unsafe fn exp_avx2(x: std::arch::x86_64::__m256) -> std::arch::x86_64::__m256 {
+#[target_feature(enable = "avx512f")]
+pub(crate) unsafe fn exp_avx512(x: std::arch::x86_64::__m512) -> std::arch::x86_64::__m512 {
     use std::arch::x86_64::*;
-    let c = _mm256_set1_ps;
-    let x = _mm256_min_ps(_mm256_max_ps(x, c(-87.3)), c(88.0));
-    let k = _mm256_floor_ps(_mm256_fmadd_ps(x, c(std::f32::consts::LOG2_E), c(0.5)));
-    let r = _mm256_fnmadd_ps(k, c(0.693_359_4), x);
-    let r = _mm256_fmadd_ps(k, c(2.121_944_4e-4), r);
+    let c = _mm512_set1_ps;
+    let x = _mm512_min_ps(_mm512_max_ps(x, c(-87.3)), c(88.0));
+    let k = _mm512_roundscale_ps::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(_mm512_fmadd_ps(
+        x,
+        c(std::f32::consts::LOG2_E),
+        c(0.5),
+    ));
+    let r = _mm512_fnmadd_ps(k, c(0.693_359_4), x);
+    let r = _mm512_fmadd_ps(k, c(2.121_944_4e-4), r);
     let mut p = c(1.987_569_1e-4);
     for coef in [
         1.398_199_9e-3,
@@ -155,14 +159,11 @@ pub(crate) unsafe fn exp_avx2(x: std::arch::x86_64::__m256) -> std::arch::x86_64
         1.666_666_5e-1,
         0.5,
     ] {
-        p = _mm256_fmadd_ps(p, r, c(coef));
+        p = _mm512_fmadd_ps(p, r, c(coef));
     }
-    let y = _mm256_add_ps(_mm256_fmadd_ps(p, _mm256_mul_ps(r, r), r), c(1.0));
-    let e = _mm256_slli_epi32(
-        _mm256_add_epi32(_mm256_cvttps_epi32(k), _mm256_set1_epi32(127)),
-        23,
-    );
-    _mm256_mul_ps(y, _mm256_castsi256_ps(e))
+    let y = _mm512_add_ps(_mm512_fmadd_ps(p, _mm512_mul_ps(r, r), r), c(1.0));
+    // y * 2^k, k in [-126, 127] after the clamp.
+    _mm512_scalef_ps(y, k)
 }
 
 /// `x * sigmoid(x)`.
@@ -186,12 +187,12 @@ mod tests {
         }
         assert!(worst < 1e-6, "worst relative error {worst:e}");
         #[cfg(target_arch = "x86_64")]
-        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        if is_x86_feature_detected!("avx512f") {
             use std::arch::x86_64::*;
-            let xs = [-87.0f32, -20.5, -1.0, -0.3, 0.0, 0.7, 5.25, 80.0];
-            let mut out = [0f32; 8];
-            // SAFETY: AVX2 and FMA were detected.
-            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), exp_avx2(_mm256_loadu_ps(xs.as_ptr()))) };
+            let xs: [f32; 16] = std::array::from_fn(|i| -87.0 + i as f32 * 11.5);
+            let mut out = [0f32; 16];
+            // SAFETY: AVX-512F was detected.
+            unsafe { _mm512_storeu_ps(out.as_mut_ptr(), exp_avx512(_mm512_loadu_ps(xs.as_ptr()))) };
             for (x, y) in xs.iter().zip(out) {
                 let want = f64::from(*x).exp();
                 assert!(

@@ -19,6 +19,7 @@ mod sgemm;
 mod transformer;
 mod winograd;
 
+pub use attention::Attention;
 pub use conv::{Conv2d, conv2d};
 pub use embeddings::{TimestepEmbedding, Timesteps};
 pub use linear::{Linear, linear, linear_no_bias};
