@@ -32,10 +32,7 @@ pub fn linear_no_bias(in_dim: usize, out_dim: usize, vb: VarBuilder) -> Result<L
 impl Module for Linear {
     fn forward(&self, x: &Tensor) -> Result<Tensor> {
         let w = self.inner.weight();
-        let fast = cpu::is_cpu_f32(x)
-            && cpu::is_cpu_f32(w)
-            && self.inner.bias().is_none_or(cpu::is_cpu_f32);
-        if !fast {
+        if !(cpu::is_cpu_f32(x) && self.is_cpu_f32()) {
             return self.inner.forward(x);
         }
         let (out_dim, in_dim) = w.dims2()?;
@@ -44,45 +41,71 @@ impl Module for Linear {
             candle_core::bail!("linear: input {dims:?}, weight ({out_dim}, {in_dim})");
         }
         let rows = x.elem_count() / in_dim;
-        // Without a bias the product writes the fresh buffer without reading
-        // it (reading untouched pages first costs a second fault per page).
-        let bias = self.inner.bias();
         let mut out = vec![0f32; rows * out_dim];
-        if let Some(b) = bias {
-            // Filled on all threads: the first touch of each page faults.
-            let b = b.to_vec1::<f32>()?;
-            out.par_chunks_mut(out_dim)
-                .for_each(|row| row.copy_from_slice(&b));
-        }
-        cpu::with_f32(x, |xs| {
-            cpu::with_f32(w, |ws| {
-                // SAFETY: xs is rows x in_dim, ws is out_dim x in_dim (read
-                // transposed: in_dim x out_dim), out is rows x out_dim.
-                unsafe {
-                    cpu::matmul(
-                        (rows, out_dim, in_dim),
-                        out.as_mut_ptr(),
-                        out_dim as isize,
-                        bias.is_some(),
-                        View {
-                            ptr: xs.as_ptr(),
-                            rs: in_dim as isize,
-                            cs: 1,
-                        },
-                        View {
-                            ptr: ws.as_ptr(),
-                            rs: 1,
-                            cs: in_dim as isize,
-                        },
-                        true,
-                    )
-                };
-                Ok(())
-            })
-        })?;
+        cpu::with_f32(x, |xs| self.apply_f32(xs, rows, &mut out, false))?;
         let mut shape = dims.to_vec();
         *shape.last_mut().expect("checked above") = out_dim;
         cpu::tensor(out, &shape)
+    }
+}
+
+impl Linear {
+    /// True when the weights are f32 on the CPU ([`Linear::apply_f32`]'s domain).
+    pub(crate) fn is_cpu_f32(&self) -> bool {
+        cpu::is_cpu_f32(self.inner.weight()) && self.inner.bias().is_none_or(cpu::is_cpu_f32)
+    }
+
+    /// `out (rows x out) = [out +] x (rows x in) W^T + bias` on f32 CPU
+    /// weights; `accumulate` adds to what `out` holds (a residual).
+    pub(crate) fn apply_f32(
+        &self,
+        xs: &[f32],
+        rows: usize,
+        out: &mut [f32],
+        accumulate: bool,
+    ) -> Result<()> {
+        let w = self.inner.weight();
+        let (out_dim, in_dim) = w.dims2()?;
+        if xs.len() != rows * in_dim || out.len() != rows * out_dim {
+            candle_core::bail!("linear: buffers do not match {rows} x ({in_dim} -> {out_dim})");
+        }
+        let bias = self.inner.bias().map(|b| b.to_vec1::<f32>()).transpose()?;
+        if let Some(b) = &bias {
+            // On all threads: the first touch of each fresh page faults.
+            out.par_chunks_mut(out_dim).for_each(|row| {
+                if accumulate {
+                    row.iter_mut().zip(b).for_each(|(o, b)| *o += b);
+                } else {
+                    row.copy_from_slice(b);
+                }
+            });
+        }
+        cpu::with_f32(w, |ws| {
+            // SAFETY: xs is rows x in_dim, ws is out_dim x in_dim (read
+            // transposed: in_dim x out_dim), out is rows x out_dim. Without
+            // a bias or residual the fresh output is written without being
+            // read (reading untouched pages first costs a second fault).
+            unsafe {
+                cpu::matmul(
+                    (rows, out_dim, in_dim),
+                    out.as_mut_ptr(),
+                    out_dim as isize,
+                    accumulate || bias.is_some(),
+                    View {
+                        ptr: xs.as_ptr(),
+                        rs: in_dim as isize,
+                        cs: 1,
+                    },
+                    View {
+                        ptr: ws.as_ptr(),
+                        rs: 1,
+                        cs: in_dim as isize,
+                    },
+                    true,
+                )
+            };
+            Ok(())
+        })
     }
 }
 

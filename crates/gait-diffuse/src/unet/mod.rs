@@ -10,6 +10,7 @@ mod conv;
 mod cpu;
 mod embeddings;
 pub(crate) mod encoder;
+mod feed_forward;
 mod im2col;
 mod linear;
 mod model;

@@ -9,6 +9,7 @@ use candle_nn::{LayerNorm, VarBuilder, layer_norm};
 
 use super::attention::Attention;
 use super::conv::{Conv2d, conv2d};
+use super::feed_forward::FeedForward;
 use super::linear::{Linear, linear};
 use super::norm::{GroupNorm, group_norm};
 
@@ -20,10 +21,7 @@ struct BasicTransformerBlock {
     norm2: LayerNorm,
     attn2: Attention,
     norm3: LayerNorm,
-    /// `ff.net.0.proj`: hidden and gate halves of the GEGLU.
-    ff_in: Linear,
-    /// `ff.net.2`.
-    ff_out: Linear,
+    ff: FeedForward,
 }
 
 impl BasicTransformerBlock {
@@ -35,8 +33,7 @@ impl BasicTransformerBlock {
             norm2: layer_norm(dim, 1e-5, vb.pp("norm2"))?,
             attn2: Attention::new(vb.pp("attn2"), dim, context_dim, heads)?,
             norm3: layer_norm(dim, 1e-5, vb.pp("norm3"))?,
-            ff_in: linear(dim, 2 * inner, vb.pp("ff.net.0.proj"))?,
-            ff_out: linear(inner, dim, vb.pp("ff.net.2"))?,
+            ff: FeedForward::new(vb.pp("ff"), dim, inner)?,
         })
     }
 
@@ -46,10 +43,7 @@ impl BasicTransformerBlock {
             .attn2
             .forward(&self.norm2.forward(&x)?, Some(context))?
             + x)?;
-        let h = self.ff_in.forward(&self.norm3.forward(&x)?)?;
-        let half = h.dim(2)? / 2;
-        let gated = (h.narrow(2, 0, half)? * h.narrow(2, half, half)?.gelu_erf()?)?;
-        self.ff_out.forward(&gated)? + x
+        self.ff.forward(&self.norm3.forward(&x)?, &x)
     }
 }
 
