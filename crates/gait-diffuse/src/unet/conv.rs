@@ -1,6 +1,7 @@
-//! `nn.Conv2d` with diffusers' tensor names (`weight`, `bias`). Stride-1
-//! 3x3 (padding 1) convolutions of f32 CPU tensors run by Winograd or as one
-//! im2col product, 1x1 ones as a product per image, with the bias, a
+//! `nn.Conv2d` with diffusers' tensor names (`weight`, `bias`). 3x3
+//! (padding 1) convolutions of f32 CPU tensors run by Winograd (stride 1,
+//! large maps) or as one im2col product (small maps, stride 2), 1x1 ones as
+//! a product per image, with the bias, a
 //! per-image bias (the ResNet's time embedding) and a residual added in the
 //! same pass; other convolutions go to candle's `conv2d`.
 
@@ -11,7 +12,8 @@ use super::cpu::{self, View};
 use super::im2col;
 use super::winograd::{self, Start};
 
-/// A 3x3 stride-1 padding-1 f32 convolution: `(x, (b, c_in, h, w), weight, c_out, start)`.
+/// A 3x3 padding-1 f32 convolution (its stride fixed by the kernel):
+/// `(x, (b, c_in, h, w), weight, c_out, start)`.
 type Conv3x3Kernel =
     fn(&[f32], (usize, usize, usize, usize), &[f32], usize, &Start) -> Result<Vec<f32>>;
 
@@ -62,12 +64,14 @@ impl Conv2d {
         per_image: Option<&Tensor>,
         residual: Option<&Tensor>,
     ) -> Result<Tensor> {
-        let same_size = self.stride == 1 && 2 * self.padding + 1 == self.kernel && self.kernel <= 3;
+        // 1x1 and 3x3 with "same" padding, at stride 1 or (3x3) 2.
+        let supported = 2 * self.padding + 1 == self.kernel
+            && (self.stride == 1 && self.kernel <= 3 || self.stride == 2 && self.kernel == 3);
         let all_f32 = cpu::is_cpu_f32(x)
             && cpu::is_cpu_f32(&self.weight)
             && per_image.is_none_or(cpu::is_cpu_f32)
             && residual.is_none_or(cpu::is_cpu_f32);
-        if same_size && all_f32 {
+        if supported && all_f32 {
             return self.fast(x, per_image, residual);
         }
         let c_out = self.weight.dim(0)?;
@@ -98,21 +102,24 @@ impl Conv2d {
         {
             candle_core::bail!("conv2d: per-image bias {:?}, want [{b}, {c_out}]", p.dims());
         }
+        let (ho, wo) = ((h - 1) / self.stride + 1, (w - 1) / self.stride + 1);
         if let Some(r) = residual
-            && r.dims() != [b, c_out, h, w]
+            && r.dims() != [b, c_out, ho, wo]
         {
             candle_core::bail!(
-                "conv2d: residual {:?}, want [{b}, {c_out}, {h}, {w}]",
+                "conv2d: residual {:?}, want [{b}, {c_out}, {ho}, {wo}]",
                 r.dims()
             );
         }
         if self.kernel == 3 {
-            let kernel = if h * w >= WINOGRAD_MIN_PIXELS {
+            let kernel: Conv3x3Kernel = if self.stride == 2 {
+                |x, dims, w, c_out, start| im2col::conv3x3(x, dims, w, c_out, 2, start)
+            } else if h * w >= WINOGRAD_MIN_PIXELS {
                 winograd::conv3x3
             } else {
-                im2col::conv3x3
+                |x, dims, w, c_out, start| im2col::conv3x3(x, dims, w, c_out, 1, start)
             };
-            return self.conv3x3(x, per_image, residual, kernel);
+            return self.conv3x3(x, per_image, residual, (ho, wo), kernel);
         }
         // 1x1: one product per image, into a destination holding the start terms.
         let mut out = vec![0f32; b * c_out * h * w];
@@ -176,6 +183,7 @@ impl Conv2d {
         x: &Tensor,
         per_image: Option<&Tensor>,
         residual: Option<&Tensor>,
+        (ho, wo): (usize, usize),
         kernel: Conv3x3Kernel,
     ) -> Result<Tensor> {
         let (b, c_in, h, w) = x.dims4()?;
@@ -201,7 +209,7 @@ impl Conv2d {
             Some(r) => cpu::with_f32(r, |rs| run(Some(rs)))?,
             None => run(None)?,
         };
-        cpu::tensor(out, &[b, c_out, h, w])
+        cpu::tensor(out, &[b, c_out, ho, wo])
     }
 }
 
@@ -231,12 +239,22 @@ mod tests {
     #[test]
     fn fast_paths_match_candle_conv_with_fused_terms() {
         let dev = Device::Cpu;
-        // 16x17 takes the Winograd path (at least WINOGRAD_MIN_PIXELS), the other 3x3s im2col.
-        for (k, h, w) in [(3, 5, 7), (1, 4, 3), (3, 1, 1), (3, 16, 17)] {
-            let c = conv(6, 5, k, 1, DType::F32);
+        // 16x17 at stride 1 takes the Winograd path (at least
+        // WINOGRAD_MIN_PIXELS), the other 3x3s im2col; odd and even sizes at stride 2.
+        for (k, stride, h, w) in [
+            (3, 1, 5, 7),
+            (1, 1, 4, 3),
+            (3, 1, 1, 1),
+            (3, 1, 16, 17),
+            (3, 2, 5, 7),
+            (3, 2, 8, 8),
+            (3, 2, 1, 1),
+        ] {
+            let c = conv(6, 5, k, stride, DType::F32);
             let x = Tensor::randn(0f32, 1.0, (2, 6, h, w), &dev).unwrap();
             let per = Tensor::randn(0f32, 1.0, (2, 5), &dev).unwrap();
-            let res = Tensor::randn(0f32, 1.0, (2, 5, h, w), &dev).unwrap();
+            let (ho, wo) = ((h - 1) / stride + 1, (w - 1) / stride + 1);
+            let res = Tensor::randn(0f32, 1.0, (2, 5, ho, wo), &dev).unwrap();
             let fast = c.forward_with(&x, Some(&per), Some(&res)).unwrap();
             // The same through candle's ops (f64 takes the fallback).
             let c64 = Conv2d {
@@ -261,7 +279,7 @@ mod tests {
                 .unwrap()
                 .to_scalar::<f32>()
                 .unwrap();
-            assert!(d < 1e-4, "k={k} {h}x{w}: {d}");
+            assert!(d < 1e-4, "k={k} stride {stride} {h}x{w}: {d}");
         }
     }
 }
