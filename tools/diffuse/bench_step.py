@@ -53,6 +53,39 @@ def diffusers_worker(work, size, repeats, threads):
             print(f"diffusers step {i}: {time.perf_counter() - t0:.3f} s", flush=True)
 
 
+def check(work, bin_path, size):
+    """Full-size agreement: one guided step of diffusers and of our candle code on the same
+    weights and the same random inputs; prints the largest difference of the UNet outputs,
+    relative to diffusers' largest magnitude (the fixture tests' measure)."""
+    from diffusers import ControlNetModel, UNet2DConditionModel
+    from safetensors.torch import load_file, save_file
+
+    g = torch.Generator().manual_seed(1)
+    lat = size // 8
+    inputs = {
+        "x": torch.randn(2, 4, lat, lat, generator=g),
+        "ctx": torch.randn(2, 77, 768, generator=g),
+        "cond": torch.rand(2, 3, size, size, generator=g),
+    }
+    in_path, out_path = os.path.join(work, "check_inputs.safetensors"), os.path.join(work, "check_eps.safetensors")
+    save_file(inputs, in_path)
+    unet = UNet2DConditionModel.from_pretrained(os.path.join(work, "sd", "unet")).eval()
+    cn = ControlNetModel.from_pretrained(os.path.join(work, "cn")).eval()
+    with torch.no_grad():
+        down, mid = cn(inputs["x"], 501, encoder_hidden_states=inputs["ctx"], controlnet_cond=inputs["cond"],
+                       return_dict=False)
+        want = unet(inputs["x"], 501, encoder_hidden_states=inputs["ctx"], down_block_additional_residuals=down,
+                    mid_block_additional_residual=mid).sample
+    del unet, cn
+    gc.collect()
+    subprocess.run([bin_path, "candle", os.path.join(work, "sd"), os.path.join(work, "cn"), str(size), "1",
+                    in_path, out_path], check=True)
+    got = load_file(out_path)["eps"]
+    err = ((got - want).abs().max() / want.abs().max()).item()
+    print(f"full-size check: max |candle - diffusers| / max |diffusers| = {err:.3e} "
+          f"(max |diffusers| {want.abs().max().item():.3f})")
+
+
 def prepare(work, onnx):
     """SD 1.5's UNet (cross_attention_dim 768, the rest diffusers' defaults = SD 1.5) and
     sd-controlnet-canny's ControlNet with random weights, as safetensors and (when `onnx`,
@@ -102,6 +135,8 @@ def main():
     ap.add_argument("--threads", type=int, default=os.cpu_count())
     ap.add_argument("--work", help="keep the weights in this folder and reuse them on later runs "
                     "(default: a temporary folder, removed at the end)")
+    ap.add_argument("--check", action="store_true",
+                    help="instead of timing, compare candle's step with diffusers' on the same inputs")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
@@ -116,6 +151,9 @@ def main():
         if not ready:
             onnx_dir = prepare(work, "ort" in impls)
             print(f"weights written and exported in {time.perf_counter() - t0:.0f} s", flush=True)
+        if args.check:
+            check(work, args.bin, args.size)
+            return
         cmds = {
             "diffusers": [sys.executable, os.path.abspath(__file__), "--worker", work, "--size", str(args.size),
                           "--repeats", str(args.repeats), "--threads", str(args.threads)],

@@ -3,8 +3,11 @@
 //! tools/diffuse/bench_step.py, which writes random weights (and their ONNX
 //! exports) and times diffusers on the same ones.
 //!
-//! Usage: bench_step candle SD_DIR CONTROLNET_DIR SIZE REPEATS
+//! Usage: bench_step candle SD_DIR CONTROLNET_DIR SIZE REPEATS [INPUTS OUTPUT]
 //!        bench_step ort ONNX_DIR SIZE REPEATS      (needs ORT_DYLIB_PATH)
+//! With INPUTS (a safetensors file holding `x`, `ctx` and `cond`) the step
+//! runs on those instead of random inputs and writes the UNet's output as
+//! `eps` to OUTPUT: bench_step.py --check compares it with diffusers'.
 
 use std::time::Instant;
 
@@ -13,7 +16,7 @@ use gait_diffuse::model_config::{UnetConfig, read_config};
 use gait_diffuse::weights::build_unet;
 use gait_diffuse::{ControlNet, OrtDenoiser};
 
-const USAGE: &str = "usage: bench_step candle SD_DIR CONTROLNET_DIR SIZE REPEATS | bench_step ort ONNX_DIR SIZE REPEATS";
+const USAGE: &str = "usage: bench_step candle SD_DIR CONTROLNET_DIR SIZE REPEATS [INPUTS OUTPUT] | bench_step ort ONNX_DIR SIZE REPEATS";
 
 /// Random inputs of one guided step: latents, text context, condition image.
 fn inputs(size: usize, cross: usize) -> candle_core::Result<(Tensor, Tensor, Tensor)> {
@@ -31,6 +34,7 @@ fn candle(
     cn: &str,
     size: usize,
     repeats: usize,
+    io: Option<(&str, &str)>,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let dev = Device::Cpu;
     let sd = std::path::Path::new(sd);
@@ -45,13 +49,24 @@ fn candle(
     )?;
     let ccfg: UnetConfig = read_config(cn)?;
     let controlnet = ControlNet::new(load(cn.join("diffusion_pytorch_model.safetensors"))?, &ccfg)?;
-    let (x, ctx, cond) = inputs(size, ucfg.cross_attention_dim)?;
+    let (x, ctx, cond) = match io {
+        Some((path, _)) => {
+            let mut t = candle_core::safetensors::load(path, &dev)?;
+            let mut take =
+                |name: &str| t.remove(name).ok_or(format!("{path} has no tensor {name}"));
+            (take("x")?, take("ctx")?, take("cond")?)
+        }
+        None => inputs(size, ucfg.cross_attention_dim)?,
+    };
     for i in 0..repeats {
         let t0 = Instant::now();
         let r = controlnet.forward(&x, 501.0, &ctx, &cond, 1.0)?;
         let eps = unet.forward_with_residuals(&x, 501.0, &ctx, &r)?;
         let _ = eps.sum_all()?.to_scalar::<f32>()?;
         println!("candle step {i}: {:.3} s", t0.elapsed().as_secs_f64());
+        if let Some((_, out)) = io {
+            candle_core::safetensors::save(&std::collections::HashMap::from([("eps", eps)]), out)?;
+        }
     }
     Ok(())
 }
@@ -76,7 +91,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     match args.as_slice() {
-        ["candle", sd, cn, size, repeats] => candle(sd, cn, size.parse()?, repeats.parse()?),
+        ["candle", sd, cn, size, repeats] => candle(sd, cn, size.parse()?, repeats.parse()?, None),
+        ["candle", sd, cn, size, repeats, input, output] => candle(
+            sd,
+            cn,
+            size.parse()?,
+            repeats.parse()?,
+            Some((input, output)),
+        ),
         ["ort", onnx, size, repeats] => ort(onnx, size.parse()?, repeats.parse()?),
         _ => Err(USAGE.into()),
     }
