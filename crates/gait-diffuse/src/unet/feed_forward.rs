@@ -144,14 +144,7 @@ mod tests {
             .unwrap()
             + &res)
             .unwrap();
-        let d = (got - want)
-            .unwrap()
-            .abs()
-            .unwrap()
-            .max_all()
-            .unwrap()
-            .to_scalar::<f32>()
-            .unwrap();
+        let d = cpu::max_abs_diff(&got, &want);
         assert!(d < 1e-4, "{d}");
     }
 }

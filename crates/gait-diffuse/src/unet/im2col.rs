@@ -130,32 +130,14 @@ fn fill_patches(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::unet::winograd::tests::{direct, values};
+    use crate::unet::winograd::tests::check_against_direct;
 
     #[test]
     fn matches_a_direct_convolution_with_start_terms() {
-        for (b, ci, co, h, w) in [(2, 5, 3, 6, 8), (1, 4, 6, 7, 5), (2, 3, 2, 1, 1)] {
-            // Stride 2 (torch's output size) is checked against candle in conv.rs.
-            let x = values(b * ci * h * w, 1);
-            let wt = values(co * ci * 9, 2);
-            let bias = values(co, 3);
-            let per = values(b * co, 4);
-            let res = values(b * co * h * w, 5);
-            let start = Start {
-                bias: &bias,
-                per_image: Some(&per),
-                residual: Some(&res),
-            };
-            let got = conv3x3(&x, (b, ci, h, w), &wt, co, 1, &start).unwrap();
-            let want = direct(&x, (b, ci, h, w), &wt, co);
-            for (k, (g, d)) in got.iter().zip(&want).enumerate() {
-                let (i, o) = (k / (co * h * w), (k / (h * w)) % co);
-                let e = d + f64::from(bias[o] + per[i * co + o] + res[k]);
-                assert!(
-                    (f64::from(*g) - e).abs() < 1e-5,
-                    "{b}x{ci}->{co} {h}x{w} at {k}"
-                );
-            }
-        }
+        // Stride 2 (torch's output size) is checked against candle in conv.rs.
+        check_against_direct(
+            |x, dims, wt, co, start| conv3x3(x, dims, wt, co, 1, start).unwrap(),
+            &[(2, 5, 3, 6, 8), (1, 4, 6, 7, 5), (2, 3, 2, 1, 1)],
+        );
     }
 }

@@ -241,7 +241,7 @@ pub(crate) mod tests {
     use super::*;
 
     /// Direct 3x3 convolution in f64 (the definition).
-    pub(crate) fn direct(
+    fn direct(
         x: &[f32],
         (b, ci, h, w): (usize, usize, usize, usize),
         wt: &[f32],
@@ -273,7 +273,7 @@ pub(crate) mod tests {
         out
     }
 
-    pub(crate) fn values(n: usize, seed: u32) -> Vec<f32> {
+    fn values(n: usize, seed: u32) -> Vec<f32> {
         // A small deterministic pseudo-random sequence in [-1, 1).
         let mut s = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
         (0..n)
@@ -286,14 +286,13 @@ pub(crate) mod tests {
             .collect()
     }
 
-    #[test]
-    fn matches_a_direct_convolution_with_start_terms_on_odd_and_even_sizes() {
-        for (b, ci, co, h, w) in [
-            (2, 5, 3, 6, 8),
-            (1, 4, 6, 7, 5),
-            (2, 3, 2, 1, 1),
-            (1, 2, 2, 2, 9),
-        ] {
+    /// Checks `conv` (stride 1) against [`direct`] plus the start terms on `cases` of
+    /// `(batch, c_in, c_out, h, w)`.
+    pub(crate) fn check_against_direct(
+        conv: impl Fn(&[f32], (usize, usize, usize, usize), &[f32], usize, &Start) -> Vec<f32>,
+        cases: &[(usize, usize, usize, usize, usize)],
+    ) {
+        for &(b, ci, co, h, w) in cases {
             let x = values(b * ci * h * w, 1);
             let wt = values(co * ci * 9, 2);
             let bias = values(co, 3);
@@ -304,7 +303,7 @@ pub(crate) mod tests {
                 per_image: Some(&per),
                 residual: Some(&res),
             };
-            let got = conv3x3(&x, (b, ci, h, w), &wt, co, &start).unwrap();
+            let got = conv(&x, (b, ci, h, w), &wt, co, &start);
             let want = direct(&x, (b, ci, h, w), &wt, co);
             for (k, (g, d)) in got.iter().zip(&want).enumerate() {
                 let (i, o) = (k / (co * h * w), (k / (h * w)) % co);
@@ -315,5 +314,18 @@ pub(crate) mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn matches_a_direct_convolution_with_start_terms_on_odd_and_even_sizes() {
+        check_against_direct(
+            |x, dims, wt, co, start| conv3x3(x, dims, wt, co, start).unwrap(),
+            &[
+                (2, 5, 3, 6, 8),
+                (1, 4, 6, 7, 5),
+                (2, 3, 2, 1, 1),
+                (1, 2, 2, 2, 9),
+            ],
+        );
     }
 }
