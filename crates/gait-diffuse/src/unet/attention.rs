@@ -129,6 +129,7 @@ fn fused(q: &Tensor, k: &Tensor, v: &Tensor, heads: usize) -> Result<Tensor> {
     let mut out = vec![0f32; b * n * c];
     let dst = SharedMut(out.as_mut_ptr());
     let blocks = n.div_ceil(QUERIES);
+    let tile = sgemm::tile_kernel();
     cpu::with_f32(q, |qs| {
         (0..b * heads * blocks).into_par_iter().for_each(|task| {
             let (img, rest) = (task / (heads * blocks), task % (heads * blocks));
@@ -153,7 +154,7 @@ fn fused(q: &Tensor, k: &Tensor, v: &Tensor, heads: usize) -> Result<Tensor> {
                     sgemm::pack::<NR>(qp, q_t, 0, d, 0, nq);
                     for t in 0..m.div_ceil(MR) {
                         for s in 0..strips {
-                            sgemm::tile(
+                            tile(
                                 d,
                                 kp.as_ptr().add(t * MR * d),
                                 qp.as_ptr().add(s * NR * d),
@@ -173,7 +174,7 @@ fn fused(q: &Tensor, k: &Tensor, v: &Tensor, heads: usize) -> Result<Tensor> {
                 unsafe {
                     for t in 0..d.div_ceil(MR) {
                         for s in 0..strips {
-                            sgemm::tile(
+                            tile(
                                 m,
                                 vp.as_ptr().add(t * MR * m),
                                 st.as_ptr().add(s * NR * m),

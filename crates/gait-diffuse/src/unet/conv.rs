@@ -1,9 +1,9 @@
 //! `nn.Conv2d` with diffusers' tensor names (`weight`, `bias`). 3x3
 //! (padding 1) convolutions of f32 CPU tensors run by Winograd (stride 1,
 //! large maps) or as one im2col product (small maps, stride 2), 1x1 ones as
-//! a product per image, with the bias, a
-//! per-image bias (the ResNet's time embedding) and a residual added in the
-//! same pass; other convolutions go to candle's `conv2d`.
+//! a product per image, with the bias, a per-image bias (the ResNet's time
+//! embedding) and a residual added in the same pass; other convolutions go
+//! to candle's `conv2d`.
 
 use candle_core::{Result, Tensor};
 use candle_nn::VarBuilder;
@@ -12,10 +12,9 @@ use super::cpu::{self, View};
 use super::im2col;
 use super::winograd::{self, Start};
 
-/// A 3x3 padding-1 f32 convolution (its stride fixed by the kernel):
+/// An f32 convolution of fixed kernel size and stride, "same" padding:
 /// `(x, (b, c_in, h, w), weight, c_out, start)`.
-type Conv3x3Kernel =
-    fn(&[f32], (usize, usize, usize, usize), &[f32], usize, &Start) -> Result<Vec<f32>>;
+type Kernel = fn(&[f32], (usize, usize, usize, usize), &[f32], usize, &Start) -> Result<Vec<f32>>;
 
 /// Images at least this large take the Winograd path for 3x3 kernels; smaller
 /// ones (SD's 8x8 level) one im2col product, where the per-call weight
@@ -111,80 +110,24 @@ impl Conv2d {
                 r.dims()
             );
         }
-        if self.kernel == 3 {
-            let kernel: Conv3x3Kernel = if self.stride == 2 {
-                |x, dims, w, c_out, start| im2col::conv3x3(x, dims, w, c_out, 2, start)
-            } else if h * w >= WINOGRAD_MIN_PIXELS {
-                winograd::conv3x3
-            } else {
-                |x, dims, w, c_out, start| im2col::conv3x3(x, dims, w, c_out, 1, start)
-            };
-            return self.conv3x3(x, per_image, residual, (ho, wo), kernel);
-        }
-        // 1x1: one product per image, into a destination holding the start terms.
-        let mut out = vec![0f32; b * c_out * h * w];
-        let per_v = per_image
-            .map(|p| p.flatten_all()?.to_vec1::<f32>())
-            .transpose()?;
-        let run = |res: Option<&[f32]>, out: &mut [f32]| {
-            cpu::with_f32(x, |xs| {
-                cpu::with_f32(&self.weight, |ws| {
-                    cpu::with_f32(&self.bias, |bias| {
-                        for (i, dst_img) in out.chunks_exact_mut(c_out * h * w).enumerate() {
-                            let img = &xs[i * c_in * h * w..(i + 1) * c_in * h * w];
-                            for (co, row) in dst_img.chunks_exact_mut(h * w).enumerate() {
-                                let s =
-                                    bias[co] + per_v.as_ref().map_or(0.0, |p| p[i * c_out + co]);
-                                match res {
-                                    Some(r) => {
-                                        let r = &r[(i * c_out + co) * h * w..][..h * w];
-                                        row.iter_mut().zip(r).for_each(|(d, r)| *d = s + r)
-                                    }
-                                    None => row.fill(s),
-                                }
-                            }
-                            // SAFETY: weight (c_out x c_in), image (c_in x hw), dst (c_out x hw).
-                            unsafe {
-                                cpu::matmul(
-                                    (c_out, h * w, c_in),
-                                    dst_img.as_mut_ptr(),
-                                    (h * w) as isize,
-                                    true,
-                                    View {
-                                        ptr: ws.as_ptr(),
-                                        rs: c_in as isize,
-                                        cs: 1,
-                                    },
-                                    View {
-                                        ptr: img.as_ptr(),
-                                        rs: (h * w) as isize,
-                                        cs: 1,
-                                    },
-                                    true,
-                                )
-                            };
-                        }
-                        Ok(())
-                    })
-                })
-            })
+        let kernel: Kernel = match (self.kernel, self.stride) {
+            (1, _) => pointwise,
+            (_, 2) => |x, dims, w, c_out, start| im2col::conv3x3(x, dims, w, c_out, 2, start),
+            _ if h * w >= WINOGRAD_MIN_PIXELS => winograd::conv3x3,
+            _ => |x, dims, w, c_out, start| im2col::conv3x3(x, dims, w, c_out, 1, start),
         };
-        match residual {
-            Some(r) => cpu::with_f32(r, |rs| run(Some(rs), &mut out))?,
-            None => run(None, &mut out)?,
-        }
-        cpu::tensor(out, &[b, c_out, h, w])
+        self.run(x, per_image, residual, (ho, wo), kernel)
     }
 
-    /// The 3x3 case of [`Conv2d::fast`] through `kernel` (Winograd or
-    /// im2col; shapes already checked).
-    fn conv3x3(
+    /// [`Conv2d::fast`] through `kernel` on the f32 buffers (shapes already
+    /// checked; the output is `(B, c_out, ho, wo)`).
+    fn run(
         &self,
         x: &Tensor,
         per_image: Option<&Tensor>,
         residual: Option<&Tensor>,
         (ho, wo): (usize, usize),
-        kernel: Conv3x3Kernel,
+        kernel: Kernel,
     ) -> Result<Tensor> {
         let (b, c_in, h, w) = x.dims4()?;
         let c_out = self.weight.dim(0)?;
@@ -211,6 +154,55 @@ impl Conv2d {
         };
         cpu::tensor(out, &[b, c_out, ho, wo])
     }
+}
+
+/// The 1x1 convolution: one product per image, into a destination holding
+/// the start terms.
+fn pointwise(
+    x: &[f32],
+    (b, c_in, h, w): (usize, usize, usize, usize),
+    weight: &[f32],
+    c_out: usize,
+    start: &Start,
+) -> Result<Vec<f32>> {
+    let hw = h * w;
+    if x.len() != b * c_in * hw || weight.len() != c_out * c_in {
+        candle_core::bail!("1x1 conv: buffer sizes do not match the shapes");
+    }
+    let mut out = vec![0f32; b * c_out * hw];
+    for (i, dst_img) in out.chunks_exact_mut(c_out * hw).enumerate() {
+        for (co, row) in dst_img.chunks_exact_mut(hw).enumerate() {
+            let s = start.bias[co] + start.per_image.map_or(0.0, |p| p[i * c_out + co]);
+            match start.residual {
+                Some(r) => {
+                    let r = &r[(i * c_out + co) * hw..][..hw];
+                    row.iter_mut().zip(r).for_each(|(d, r)| *d = s + r)
+                }
+                None => row.fill(s),
+            }
+        }
+        // SAFETY: weight (c_out x c_in), image i (c_in x hw), dst (c_out x hw).
+        unsafe {
+            cpu::matmul(
+                (c_out, hw, c_in),
+                dst_img.as_mut_ptr(),
+                hw as isize,
+                true,
+                View {
+                    ptr: weight.as_ptr(),
+                    rs: c_in as isize,
+                    cs: 1,
+                },
+                View {
+                    ptr: x.as_ptr().add(i * c_in * hw),
+                    rs: hw as isize,
+                    cs: 1,
+                },
+                true,
+            )
+        };
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -107,6 +107,7 @@ unsafe fn single(
     let kc_max = KC.min(k).max(1);
     let bp_len = kc_max * NC.min(n.div_ceil(NR) * NR);
     let ap_len = kc_max * MC.min(m.div_ceil(MR) * MR);
+    let tile = tile_kernel();
     cpu::with_scratch(bp_len, |bp| {
         cpu::with_scratch(ap_len, |ap| {
             for jc in (0..n).step_by(NC) {
@@ -218,35 +219,26 @@ pub(crate) unsafe fn pack<const W: usize>(
     }
 }
 
-/// `c (rows x cols) = [c +] a-strip @ b-strip` for one packed MR x NR tile:
-/// `a` holds `kc` x MR values (`a[p * MR + r]`), `b` `kc` x NR (`b[p * NR + j]`),
-/// both zero past `rows` / `cols`. AVX-512 where [`available`], else plain
-/// code the compiler vectorises for the baseline target.
-///
-/// # Safety
-/// The strips must hold `kc` full rows; `c` must address rows x cols with row
-/// stride `c_rs`.
-#[allow(clippy::too_many_arguments)]
-pub(crate) unsafe fn tile(
-    kc: usize,
-    a: *const f32,
-    b: *const f32,
-    c: *mut f32,
-    c_rs: isize,
-    load: bool,
-    rows: usize,
-    cols: usize,
-) {
+/// A tile kernel: `c (rows x cols) = [c +] a-strip @ b-strip` for one packed
+/// MR x NR tile, arguments `(kc, a, b, c, c_rs, load, rows, cols)`: `a` holds
+/// `kc` x MR values (`a[p * MR + r]`), `b` `kc` x NR (`b[p * NR + j]`), both
+/// zero past `rows` / `cols`; `c` addresses rows x cols with row stride
+/// `c_rs`, added to when `load`.
+pub(crate) type Tile =
+    unsafe fn(usize, *const f32, *const f32, *mut f32, isize, bool, usize, usize);
+
+/// This CPU's tile kernel: AVX-512 where [`available`], else plain code the
+/// compiler vectorises for the baseline target. Callers look it up once per
+/// product, not per tile.
+pub(crate) fn tile_kernel() -> Tile {
     #[cfg(target_arch = "x86_64")]
     if available() {
-        // SAFETY: AVX-512 is present; the rest is forwarded.
-        return unsafe { tile_avx512(kc, a, b, c, c_rs, load, rows, cols) };
+        return tile_avx512;
     }
-    // SAFETY: forwarded.
-    unsafe { tile_portable(kc, a, b, c, c_rs, load, rows, cols) }
+    tile_portable
 }
 
-/// [`tile`] in plain code.
+/// The [`Tile`] kernel in plain code.
 #[allow(clippy::too_many_arguments)]
 unsafe fn tile_portable(
     kc: usize,
@@ -275,7 +267,7 @@ unsafe fn tile_portable(
     unsafe { store_part(&acc, c, c_rs, load, rows, cols) }
 }
 
-/// [`tile`] with AVX-512 registers.
+/// The [`Tile`] kernel with AVX-512 registers.
 #[allow(clippy::too_many_arguments)]
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
@@ -397,7 +389,7 @@ mod tests {
             }
             let mut c = vec![1f32; rows * c_rs as usize];
             unsafe {
-                let f = if avx { tile } else { tile_portable };
+                let f: Tile = if avx { tile_kernel() } else { tile_portable };
                 f(
                     kc,
                     a.as_ptr(),
