@@ -1,7 +1,7 @@
 //! Shared types and stage traits of the `gait` toolkit.
 //!
 //! Data flows one way through the stages defined here:
-//! [`Frame`]s -> [`EdgeMap`]s -> regenerated [`Frame`]s -> [`Pose`]s -> [`PoseSequence`].
+//! [`Frame`]s -> the subject ([`PersonBox`] per frame) -> [`EdgeMap`]s -> regenerated [`Frame`]s -> [`Pose`]s -> [`PoseSequence`].
 //! Stage crates implement [`EdgeDetector`], [`ImageRegenerator`] and [`PoseEstimator`];
 //! they never depend on each other, only on this crate.
 
@@ -15,6 +15,7 @@ mod frame;
 pub mod geometry;
 pub mod keypoint;
 pub mod openpose_layout;
+mod person;
 mod pose;
 mod stage;
 
@@ -26,5 +27,6 @@ pub use error::StageError;
 pub use frame::Frame;
 pub use geometry::Resize;
 pub use keypoint::{CANONICAL, Keypoint};
+pub use person::{PersonAt, PersonBox, PersonChoice, PersonRule};
 pub use pose::{Pose, PoseSequence};
 pub use stage::{EdgeDetector, ImageRegenerator, PoseEstimator};

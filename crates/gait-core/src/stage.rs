@@ -2,7 +2,7 @@
 //! each stage a slice of consecutive frames (of the configured batch size) in
 //! input order, so stateful stages (e.g. pose trackers) see frames in order.
 
-use crate::{EdgeMap, Frame, Pose, StageError};
+use crate::{EdgeMap, Frame, PersonBox, Pose, StageError};
 
 /// Turns frames into edge maps (the ControlNet condition).
 pub trait EdgeDetector: Send {
@@ -50,6 +50,32 @@ pub trait PoseEstimator: Send {
     /// Returns one pose per frame, in the frame's own pixel coordinates.
     /// A frame without a person yields [`Pose::empty`], not an error.
     fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError>;
+
+    /// Every person in `frame`, for the subject pass that links people into
+    /// tracks; `None` when the estimator cannot list people (the run then
+    /// follows the estimator's own choice of person).
+    fn people(&mut self, frame: &Frame) -> Result<Option<Vec<PersonBox>>, StageError> {
+        let _ = frame;
+        Ok(None)
+    }
+
+    /// As [`Self::estimate`], for the subject only: `subject[i]` is where the
+    /// subject is in `frames[i]` (one of [`Self::people`]'s boxes), `None`
+    /// where the subject is not in view, which yields [`Pose::empty`].
+    /// The default estimates as usual and blanks the frames without subject.
+    fn estimate_subject(
+        &mut self,
+        frames: &[Frame],
+        subject: &[Option<PersonBox>],
+    ) -> Result<Vec<Pose>, StageError> {
+        let mut poses = self.estimate(frames)?;
+        for (pose, at) in poses.iter_mut().zip(subject) {
+            if at.is_none() {
+                *pose = Pose::empty(pose.keypoints.len());
+            }
+        }
+        Ok(poses)
+    }
 
     /// Forgets any tracking state, e.g. before a run that resumes mid-video.
     fn reset(&mut self) {}

@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect::<Result<Vec<_>, image::ImageError>>()?;
     let config = BlazeposeConfig {
         backend,
-        person: PersonChoice::MostConfident,
+        person: PersonChoice::Rule(gait_pose::PersonRule::MostConfident),
         tracking: false,
         ..Default::default()
     };

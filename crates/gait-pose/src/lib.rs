@@ -5,7 +5,7 @@ pub mod blazepose;
 pub mod openpose;
 mod person;
 
-pub use person::PersonChoice;
+pub use person::{PersonAt, PersonChoice, PersonRule};
 
 use std::path::PathBuf;
 

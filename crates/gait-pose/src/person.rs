@@ -1,24 +1,10 @@
-//! Which person to follow when several are in view, shared by the pose
+//! Which person an estimator follows on its own, when no subject pass tells
+//! it (`estimate` without a subject): the first choice is made when a person
+//! is first found (or lost and found again); after that the estimator keeps to
+//! the person nearest to where the followed one was. Shared by the pose
 //! estimators so that `person = "..."` means the same everywhere.
 
-use serde::{Deserialize, Serialize};
-
-/// Which person to follow when several are in view. The choice is made when a
-/// person is first found (or lost and found again); after that the estimator
-/// keeps to the person nearest to where the followed one was.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PersonChoice {
-    /// The biggest body (usually the one nearest the camera).
-    #[default]
-    Largest,
-    Leftmost,
-    Rightmost,
-    /// Nearest the image centre.
-    MostCentral,
-    /// The model's best score.
-    MostConfident,
-}
+pub use gait_core::{PersonAt, PersonChoice, PersonRule};
 
 /// A person found in one frame, in pixels.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,11 +48,14 @@ pub fn choose(
     }
     let centre = (width as f32 / 2.0, height as f32 / 2.0);
     match choice {
-        PersonChoice::MostConfident => best(&|p| -p.score),
-        PersonChoice::Largest => best(&|p| -p.size),
-        PersonChoice::Leftmost => best(&|p| p.cx),
-        PersonChoice::Rightmost => best(&|p| -p.cx),
-        PersonChoice::MostCentral => best(&|p| dist(p, centre)),
+        PersonChoice::At(at) => best(&|p| dist(p, (at.x, at.y))),
+        // Walking is a property of a track, not of one frame: on its own an
+        // estimator falls back to the biggest body.
+        PersonChoice::Rule(PersonRule::Walker | PersonRule::Largest) => best(&|p| -p.size),
+        PersonChoice::Rule(PersonRule::MostConfident) => best(&|p| -p.score),
+        PersonChoice::Rule(PersonRule::Leftmost) => best(&|p| p.cx),
+        PersonChoice::Rule(PersonRule::Rightmost) => best(&|p| -p.cx),
+        PersonChoice::Rule(PersonRule::MostCentral) => best(&|p| dist(p, centre)),
     }
 }
 
@@ -87,27 +76,38 @@ mod tests {
     fn each_choice() {
         // A small confident person at the left, a big one right of centre, one far right.
         let people = [at(10.0, 5.0, 0.9), at(60.0, 20.0, 0.8), at(90.0, 10.0, 0.7)];
-        let pick = |c| choose(&people, c, None, 100, 100).unwrap();
-        assert_eq!(pick(PersonChoice::MostConfident), 0);
-        assert_eq!(pick(PersonChoice::Leftmost), 0);
-        assert_eq!(pick(PersonChoice::Rightmost), 2);
-        assert_eq!(pick(PersonChoice::Largest), 1);
-        assert_eq!(pick(PersonChoice::MostCentral), 1);
-        assert!(choose(&[], PersonChoice::Largest, None, 100, 100).is_none());
+        let pick = |r| choose(&people, PersonChoice::Rule(r), None, 100, 100).unwrap();
+        assert_eq!(pick(PersonRule::MostConfident), 0);
+        assert_eq!(pick(PersonRule::Leftmost), 0);
+        assert_eq!(pick(PersonRule::Rightmost), 2);
+        assert_eq!(pick(PersonRule::Largest), 1);
+        assert_eq!(pick(PersonRule::Walker), 1);
+        assert_eq!(pick(PersonRule::MostCentral), 1);
+        let at = PersonChoice::At(PersonAt {
+            frame: 0,
+            x: 88.0,
+            y: 50.0,
+        });
+        assert_eq!(choose(&people, at, None, 100, 100), Some(2));
+        assert!(choose(&[], PersonChoice::default(), None, 100, 100).is_none());
     }
 
     #[test]
     fn stays_with_the_followed_person() {
         let people = [at(60.0, 20.0, 0.9), at(12.0, 5.0, 0.8)];
         let near_left = Some((10.0, 50.0));
-        assert_eq!(
-            choose(&people, PersonChoice::Largest, near_left, 100, 100),
-            Some(1)
-        );
+        let largest = PersonChoice::Rule(PersonRule::Largest);
+        assert_eq!(choose(&people, largest, near_left, 100, 100), Some(1));
         // Nobody near the old position: back to the configured choice.
         let far = Some((10.0, 90.0));
         assert_eq!(
-            choose(&people[..1], PersonChoice::Leftmost, far, 100, 100),
+            choose(
+                &people[..1],
+                PersonChoice::Rule(PersonRule::Leftmost),
+                far,
+                100,
+                100
+            ),
             Some(0)
         );
     }

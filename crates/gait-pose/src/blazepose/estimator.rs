@@ -1,6 +1,6 @@
 //! The BlazePose pipeline: detect, crop, landmarks, refine, project, track.
 
-use gait_core::{Frame, Pose, PoseEstimator, StageContext, StageError};
+use gait_core::{Frame, PersonBox, Pose, PoseEstimator, StageContext, StageError};
 
 use super::BlazeposeConfig;
 use super::anchors::{DETECTOR_SIZE, anchors};
@@ -152,9 +152,54 @@ impl Blazepose {
                 }
             }
         }
+        Ok(self.accept(result, w, h))
+    }
+
+    /// The pose of the subject at `subject` in one frame: the tracked crop
+    /// while it stays on the subject, else the crop of the subject's box.
+    fn estimate_at(
+        &mut self,
+        frame: &Frame,
+        subject: Option<&PersonBox>,
+    ) -> Result<Pose, StageError> {
+        let (w, h) = (frame.width(), frame.height());
+        let Some(s) = subject.filter(|_| w > 0 && h > 0) else {
+            self.reset();
+            return Ok(Pose::empty(names::keypoint_names().len()));
+        };
+        let tracked = self
+            .track
+            .take()
+            .filter(|roi| self.config.tracking && on_subject(roi, s, w, h));
+        let mut result = None;
+        if let Some(roi) = tracked {
+            let r = self.landmarks(frame, &roi)?;
+            if r.presence >= self.config.presence_threshold {
+                result = Some(r);
+            }
+        }
+        if result.is_none() {
+            let (wf, hf) = (w as f32, h as f32);
+            let roi = Roi::from_alignment(
+                (s.centre[0] / wf, s.centre[1] / hf),
+                (s.top[0] / wf, s.top[1] / hf),
+                w,
+                h,
+            );
+            let r = self.landmarks(frame, &roi)?;
+            if r.presence >= self.config.presence_threshold {
+                result = Some(r);
+            }
+        }
+        Ok(self.accept(result, w, h))
+    }
+
+    /// The pose from an accepted landmark result (or none), and the crop to
+    /// track from in the next frame.
+    fn accept(&mut self, result: Option<LandmarkResult>, w: u32, h: u32) -> Pose {
         let Some(r) = result else {
-            self.last_centre = None;
-            return Ok(empty);
+            self.reset();
+            return Pose::empty(names::keypoint_names().len());
         };
         let lm = &r.landmarks;
         self.track = Some(Roi::from_alignment(
@@ -164,10 +209,20 @@ impl Blazepose {
             h,
         ));
         self.last_centre = Some((lm[33].x, lm[33].y));
-        Ok(Pose {
+        Pose {
             keypoints: names::to_keypoints(lm, w, h),
-        })
+        }
     }
+}
+
+/// Whether a tracked crop still lies on the subject's box: centres within
+/// half a body and sizes within a factor of 1.5 (else the tracker has slid
+/// onto someone else, or the body was only partly seen).
+fn on_subject(roi: &Roi, s: &PersonBox, w: u32, h: u32) -> bool {
+    let (cx, cy) = roi.centre_px(w, h);
+    let size = s.size().max(1.0);
+    let ratio = roi.side_px(w, h) / size;
+    (cx - s.centre[0]).hypot(cy - s.centre[1]) < 0.5 * size && (1.0 / 1.5..=1.5).contains(&ratio)
 }
 
 impl PoseEstimator for Blazepose {
@@ -177,6 +232,38 @@ impl PoseEstimator for Blazepose {
 
     fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError> {
         frames.iter().map(|f| self.estimate_one(f)).collect()
+    }
+
+    /// The detector's people: body centre (mid-hip) and the scale point the
+    /// landmark crop is built from, so [`Self::estimate_subject`] crops the
+    /// subject exactly as a detection in that frame would.
+    fn people(&mut self, frame: &Frame) -> Result<Option<Vec<PersonBox>>, StageError> {
+        let (w, h) = (frame.width() as f32, frame.height() as f32);
+        if w == 0.0 || h == 0.0 {
+            return Ok(Some(Vec::new()));
+        }
+        let dets = self.detect(frame)?;
+        Ok(Some(
+            dets.iter()
+                .map(|d| PersonBox {
+                    centre: [d.keypoints[0].0 * w, d.keypoints[0].1 * h],
+                    top: [d.keypoints[1].0 * w, d.keypoints[1].1 * h],
+                    score: d.score,
+                })
+                .collect(),
+        ))
+    }
+
+    fn estimate_subject(
+        &mut self,
+        frames: &[Frame],
+        subject: &[Option<PersonBox>],
+    ) -> Result<Vec<Pose>, StageError> {
+        frames
+            .iter()
+            .zip(subject)
+            .map(|(f, s)| self.estimate_at(f, s.as_ref()))
+            .collect()
     }
 
     fn reset(&mut self) {

@@ -41,7 +41,8 @@ pub struct BlazeposeConfig {
     pub backend: Backend,
     /// Folder holding the model files, relative to the models folder.
     pub model_dir: PathBuf,
-    /// Person to follow when several are in view.
+    /// The subject when several people are in view: `"walker"` (default),
+    /// `"largest"`, ..., or `{ frame = N, x = X, y = Y }` (see gait-subject).
     pub person: PersonChoice,
     /// Minimum detector score for a person (mediapipe: 0.5).
     pub detection_threshold: f32,
@@ -57,7 +58,7 @@ impl Default for BlazeposeConfig {
         Self {
             backend: Backend::Candle,
             model_dir: PathBuf::from("blazepose"),
-            person: PersonChoice::Largest,
+            person: PersonChoice::default(),
             detection_threshold: 0.5,
             presence_threshold: 0.5,
             tracking: true,
@@ -97,7 +98,7 @@ mod tests {
     fn config_keys() {
         let c: BlazeposeConfig =
             toml::from_str("person = \"most_central\"\ntracking = false").unwrap();
-        assert_eq!(c.person, PersonChoice::MostCentral);
+        assert_eq!(c.person, PersonChoice::Rule(crate::PersonRule::MostCentral));
         assert!(!c.tracking);
         assert_eq!(c.detection_threshold, 0.5);
         let err = toml::from_str::<BlazeposeConfig>("persn = 1")

@@ -36,6 +36,7 @@ pub fn choose(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use gait_core::PersonRule;
 
     /// An upright person with hips at (x, y) and body size `s` (normalised).
     fn det(score: f32, x: f32, y: f32, s: f32) -> Detection {
@@ -54,24 +55,29 @@ mod tests {
             det(0.8, 0.6, 0.5, 0.2),
             det(0.7, 0.9, 0.5, 0.1),
         ];
-        let pick = |p| choose(&dets, p, None, 100, 100).unwrap().cx;
-        assert!((pick(PersonChoice::MostConfident) - 0.1).abs() < 1e-6);
-        assert!((pick(PersonChoice::Leftmost) - 0.1).abs() < 1e-6);
-        assert!((pick(PersonChoice::Rightmost) - 0.9).abs() < 1e-6);
-        assert!((pick(PersonChoice::Largest) - 0.6).abs() < 1e-6);
-        assert!((pick(PersonChoice::MostCentral) - 0.6).abs() < 1e-6);
-        assert!(choose(&[], PersonChoice::Largest, None, 100, 100).is_none());
+        let pick = |r| {
+            choose(&dets, PersonChoice::Rule(r), None, 100, 100)
+                .unwrap()
+                .cx
+        };
+        assert!((pick(PersonRule::MostConfident) - 0.1).abs() < 1e-6);
+        assert!((pick(PersonRule::Leftmost) - 0.1).abs() < 1e-6);
+        assert!((pick(PersonRule::Rightmost) - 0.9).abs() < 1e-6);
+        assert!((pick(PersonRule::Largest) - 0.6).abs() < 1e-6);
+        assert!((pick(PersonRule::MostCentral) - 0.6).abs() < 1e-6);
+        assert!(choose(&[], PersonChoice::default(), None, 100, 100).is_none());
     }
 
     #[test]
     fn re_detection_stays_with_the_followed_person() {
         let dets = [det(0.9, 0.6, 0.5, 0.2), det(0.8, 0.12, 0.5, 0.05)];
-        let r = choose(&dets, PersonChoice::Largest, Some((0.1, 0.5)), 100, 100).unwrap();
+        let largest = PersonChoice::Rule(PersonRule::Largest);
+        let r = choose(&dets, largest, Some((0.1, 0.5)), 100, 100).unwrap();
         assert!((r.cx - 0.12).abs() < 1e-6);
         // Nobody near the old position: back to the configured choice.
         let r = choose(
             &dets[..1],
-            PersonChoice::Leftmost,
+            PersonChoice::Rule(PersonRule::Leftmost),
             Some((0.1, 0.9)),
             100,
             100,

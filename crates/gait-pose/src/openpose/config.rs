@@ -35,7 +35,7 @@ impl Default for OpenposeConfig {
             backend: Backend::Candle,
             model: OpenposeModel::Coco18,
             model_path: None,
-            person: PersonChoice::Largest,
+            person: PersonChoice::default(),
             search: SearchParams::default(),
         }
     }

@@ -1,0 +1,108 @@
+//! Picks the subject's track by the configured [`PersonChoice`].
+
+use gait_core::{PersonAt, PersonChoice, PersonRule};
+
+use crate::TrackSummary;
+
+/// Tracks shorter than this fraction of the longest one are passing
+/// detections (a face on a poster, one frame of a passer-by), not candidates,
+/// unless nothing else is there.
+const MIN_SHARE: f32 = 0.1;
+/// A walk shorter than this many body sizes is a shuffle, not a walk across
+/// the view (two steps are about one body size).
+pub const MIN_WALK: f32 = 1.0;
+
+/// The index of the chosen track and why, or `None` when `at` names a frame
+/// in which nobody is seen.
+pub fn choose(
+    tracks: &[TrackSummary],
+    choice: PersonChoice,
+    centre: [f32; 2],
+) -> Option<(usize, String)> {
+    let longest = tracks.iter().map(|t| t.frames).max()?;
+    let candidates: Vec<usize> = (0..tracks.len())
+        .filter(|&i| tracks[i].frames as f32 >= MIN_SHARE * longest as f32)
+        .collect();
+    let best = |key: &dyn Fn(&TrackSummary) -> f32| {
+        candidates
+            .iter()
+            .copied()
+            .max_by(|&a, &b| key(&tracks[a]).total_cmp(&key(&tracks[b])).then(b.cmp(&a)))
+    };
+    let rule = match choice {
+        PersonChoice::At(at) => return at_point(tracks, at),
+        PersonChoice::Rule(r) => r,
+    };
+    let pick = match rule {
+        PersonRule::Walker => {
+            let walker =
+                best(&|t| t.walk.displacement).filter(|&i| tracks[i].walk.displacement >= MIN_WALK);
+            return Some(match walker {
+                Some(i) => (
+                    i,
+                    format!(
+                        "walker: the longest walk across the view ({:.1} body sizes in {:.1} s, frames {}-{})",
+                        tracks[i].walk.displacement,
+                        tracks[i].walk.seconds,
+                        tracks[i].walk.first_frame,
+                        tracks[i].walk.last_frame
+                    ),
+                ),
+                None => {
+                    let i = best(&|t| t.frames as f32)?;
+                    (
+                        i,
+                        format!(
+                            "walker: nobody walks across the view (no walk of {MIN_WALK} body sizes or more); the longest track instead"
+                        ),
+                    )
+                }
+            });
+        }
+        PersonRule::Largest => best(&|t| t.mean_size),
+        PersonRule::Leftmost => best(&|t| -t.mean_centre[0]),
+        PersonRule::Rightmost => best(&|t| t.mean_centre[0]),
+        PersonRule::MostCentral => {
+            best(&|t| -(t.mean_centre[0] - centre[0]).hypot(t.mean_centre[1] - centre[1]))
+        }
+        PersonRule::MostConfident => best(&|t| t.mean_score),
+    }?;
+    let name = serde_plain(rule);
+    Some((
+        pick,
+        format!(
+            "{name}: of the tracks seen in at least {:.0} % of the longest one's frames",
+            MIN_SHARE * 100.0
+        ),
+    ))
+}
+
+/// The track whose box in `at.frame` is nearest `(at.x, at.y)`.
+fn at_point(tracks: &[TrackSummary], at: PersonAt) -> Option<(usize, String)> {
+    let (i, d) = tracks
+        .iter()
+        .enumerate()
+        .filter_map(|(i, t)| {
+            let b = t.box_at(at.frame)?;
+            Some((i, (b.centre[0] - at.x).hypot(b.centre[1] - at.y)))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    Some((
+        i,
+        format!(
+            "the person nearest ({}, {}) in frame {} ({d:.0} px from the body centre)",
+            at.x, at.y, at.frame
+        ),
+    ))
+}
+
+fn serde_plain(rule: PersonRule) -> &'static str {
+    match rule {
+        PersonRule::Walker => "walker",
+        PersonRule::Largest => "largest",
+        PersonRule::Leftmost => "leftmost",
+        PersonRule::Rightmost => "rightmost",
+        PersonRule::MostCentral => "most_central",
+        PersonRule::MostConfident => "most_confident",
+    }
+}

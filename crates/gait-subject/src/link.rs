@@ -1,0 +1,212 @@
+//! Links the people seen in each frame into tracks: one track per person,
+//! by predicted position, body size and appearance.
+
+use gait_core::PersonBox;
+use serde::{Deserialize, Serialize};
+
+use crate::appearance::Appearance;
+
+/// One person seen in one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Sighting {
+    pub frame: usize,
+    pub person: PersonBox,
+    pub appearance: Appearance,
+}
+
+/// The sightings of one person, in frame order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Track {
+    pub sightings: Vec<Sighting>,
+}
+
+/// How far a track may be carried over frames without a sighting, and how
+/// alike a later sighting must be to continue it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkLimits {
+    /// Frames a track may go unseen and still be taken up again.
+    pub max_gap_frames: usize,
+    /// Largest body-size ratio between a track and its next sighting.
+    pub max_size_ratio: f32,
+    /// Largest colour difference (see [`Appearance::distance`]) to take a
+    /// track up again after a gap of more than a few frames.
+    pub max_colour_distance: f32,
+}
+
+/// Gaps up to this many frames are ordinary detector misses: position and
+/// size decide. Longer ones need the appearance to match too.
+const SHORT_GAP: usize = 3;
+
+impl Track {
+    fn last(&self) -> &Sighting {
+        &self.sightings[self.sightings.len() - 1]
+    }
+
+    /// The body size now: the median of the last few sightings (one odd
+    /// detection does not change it).
+    fn size(&self) -> f32 {
+        let mut s: Vec<f32> = self.recent(5).map(|x| x.person.size()).collect();
+        s.sort_by(f32::total_cmp);
+        s[s.len() / 2]
+    }
+
+    fn recent(&self, n: usize) -> impl Iterator<Item = &Sighting> {
+        self.sightings[self.sightings.len().saturating_sub(n)..].iter()
+    }
+
+    /// Where the body centre should be in `frame`, from its recent velocity.
+    fn predict(&self, frame: usize) -> [f32; 2] {
+        let last = self.last();
+        let first = self.recent(6).next().unwrap_or(last);
+        let span = (last.frame - first.frame) as f32;
+        let dt = (frame - last.frame) as f32;
+        let [x, y] = last.person.centre;
+        if span == 0.0 {
+            return [x, y];
+        }
+        let vx = (x - first.person.centre[0]) / span;
+        let vy = (y - first.person.centre[1]) / span;
+        [x + vx * dt, y + vy * dt]
+    }
+
+    fn appearance(&self) -> Appearance {
+        Appearance::mean(self.recent(10).map(|s| &s.appearance))
+    }
+
+    /// The cost of continuing this track with `s`, or `None` when `s` is not
+    /// this person (too far, another size, other colours after a gap).
+    fn cost(&self, s: &Sighting, limits: &LinkLimits) -> Option<f32> {
+        let dt = s.frame - self.last().frame;
+        if dt == 0 || dt > limits.max_gap_frames + 1 {
+            return None;
+        }
+        let size = self.size().max(1.0);
+        let p = self.predict(s.frame);
+        let d = (p[0] - s.person.centre[0]).hypot(p[1] - s.person.centre[1]) / size;
+        // The prediction grows uncertain with the gap; a walker covers about
+        // 0.02 body sizes a frame, a runner 0.07.
+        let reach = (0.35 + 0.04 * dt as f32).min(1.5);
+        let ratio = (s.person.size().max(1.0) / size).ln().abs();
+        if d > reach || ratio > limits.max_size_ratio.ln() {
+            return None;
+        }
+        let colour = self.appearance().distance(&s.appearance);
+        if dt > SHORT_GAP && colour.is_none_or(|c| c > limits.max_colour_distance) {
+            return None;
+        }
+        Some(d / reach + ratio + 4.0 * colour.unwrap_or(0.0))
+    }
+}
+
+/// Links `frames` (frame index and the people seen in it, in frame order)
+/// into tracks, in order of their first sighting.
+pub fn link(frames: &[(usize, Vec<Sighting>)], limits: &LinkLimits) -> Vec<Track> {
+    let mut tracks: Vec<Track> = Vec::new();
+    for (frame, seen) in frames {
+        // Every plausible (track, sighting) pair, cheapest first: a greedy
+        // assignment, which is exact whenever the people are well apart.
+        let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
+        for (t, track) in tracks.iter().enumerate() {
+            for (k, s) in seen.iter().enumerate() {
+                if let Some(c) = track.cost(s, limits) {
+                    pairs.push((c, t, k));
+                }
+            }
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut track_used = vec![false; tracks.len()];
+        let mut seen_used = vec![false; seen.len()];
+        for (_, t, k) in pairs {
+            if !track_used[t] && !seen_used[k] {
+                track_used[t] = true;
+                seen_used[k] = true;
+                tracks[t].sightings.push(seen[k]);
+            }
+        }
+        for (k, s) in seen.iter().enumerate() {
+            if !seen_used[k] {
+                debug_assert_eq!(s.frame, *frame);
+                tracks.push(Track {
+                    sightings: vec![*s],
+                });
+            }
+        }
+    }
+    tracks
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    pub(crate) const LIMITS: LinkLimits = LinkLimits {
+        max_gap_frames: 60,
+        max_size_ratio: 1.4,
+        max_colour_distance: 0.1,
+    };
+
+    pub(crate) fn seen(frame: usize, x: f32, size: f32, grey: f32) -> Sighting {
+        Sighting {
+            frame,
+            person: PersonBox::upright(x, 500.0, size, 0.9),
+            appearance: Appearance([grey; 6]),
+        }
+    }
+
+    fn frames(
+        people: &[&dyn Fn(usize) -> Option<Sighting>],
+        n: usize,
+    ) -> Vec<(usize, Vec<Sighting>)> {
+        (0..n)
+            .map(|f| (f, people.iter().filter_map(|p| p(f)).collect()))
+            .collect()
+    }
+
+    #[test]
+    fn two_people_crossing_keep_their_tracks() {
+        // A walker from right to left crosses a standing person of the same
+        // size; their colours differ.
+        let walker = |f: usize| Some(seen(f, 1500.0 - 10.0 * f as f32, 400.0, 0.2));
+        let stander = |f: usize| Some(seen(f, 800.0, 400.0, 0.8));
+        let tracks = link(&frames(&[&walker, &stander], 140), &LIMITS);
+        assert_eq!(tracks.len(), 2);
+        for t in &tracks {
+            let grey = t.sightings[0].appearance.0[0];
+            assert_eq!(t.sightings.len(), 140);
+            assert!(t.sightings.iter().all(|s| s.appearance.0[0] == grey));
+        }
+    }
+
+    #[test]
+    fn a_hidden_person_is_taken_up_again_only_by_the_same_person() {
+        // The subject is hidden for frames 40-69, at frame 55 someone else
+        // (other colours) enters where the subject would be.
+        let subject = |f: usize| {
+            (!(40..70).contains(&f)).then(|| seen(f, 1500.0 - 10.0 * f as f32, 400.0, 0.2))
+        };
+        let other =
+            |f: usize| (f >= 55).then(|| seen(f, 1500.0 - 10.0 * f as f32 + 20.0, 400.0, 0.7));
+        let tracks = link(&frames(&[&subject, &other], 100), &LIMITS);
+        let first = &tracks[0];
+        assert!(first.sightings.iter().all(|s| s.appearance.0[0] == 0.2));
+        assert_eq!(
+            first.sightings.len(),
+            70,
+            "the subject's track resumes at 70"
+        );
+        assert!(
+            tracks
+                .iter()
+                .skip(1)
+                .all(|t| t.sightings.iter().all(|s| s.appearance.0[0] == 0.7))
+        );
+    }
+
+    #[test]
+    fn someone_of_another_size_is_not_the_subject() {
+        let subject = |f: usize| (f < 20).then(|| seen(f, 500.0, 400.0, 0.5));
+        let child = |f: usize| (f >= 25).then(|| seen(f, 500.0, 200.0, 0.5));
+        let tracks = link(&frames(&[&subject, &child], 50), &LIMITS);
+        assert_eq!(tracks.len(), 2);
+    }
+}
