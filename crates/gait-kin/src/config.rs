@@ -174,6 +174,33 @@ pub struct KinematicsConfig {
     pub min_stride_s: f64,
     /// Longest plausible stride in seconds (longer heel-strike pairs are not a cycle).
     pub max_stride_s: f64,
+    /// Video frame `[width, height]` in pixels; when known, a walking bout needs every
+    /// lower-limb keypoint at least `bout_edge_margin` inside it.
+    pub frame_size: Option<[u32; 2]>,
+    /// A walking bout needs the pelvis to move over the ground at least this fast, in leg
+    /// lengths (hip to ankle) per second.
+    pub bout_min_speed: f64,
+    /// Margin to the image border for keypoints in a bout, as a fraction of the frame width.
+    pub bout_edge_margin: f64,
+    /// Shortest walking bout in seconds; shorter runs of walking frames are dropped.
+    pub bout_min_s: f64,
+    /// Pauses in walking (too slow, direction unknown) up to this long (s) do not end a bout.
+    pub bout_bridge_s: f64,
+    /// Walking bouts as inclusive input frame ranges `[[first, last], ...]`; replaces detection.
+    pub bouts: Option<Vec<[usize; 2]>>,
+    /// A stride whose time differs from the median stride time by more than this fraction is
+    /// rejected.
+    pub cycle_max_stride_deviation: f64,
+    /// A stride with a gap (samples the pose model did not give) longer than this (s) in a
+    /// keypoint of its leg is rejected.
+    pub cycle_max_filled_s: f64,
+    /// A stride whose leg keypoints have a lower mean model likelihood is rejected.
+    pub cycle_min_likelihood: f64,
+    /// A stride whose median thigh or shank length differs from the bout's median by more than
+    /// this fraction is rejected.
+    pub cycle_segment_tolerance: f64,
+    /// Reject strides containing frames whose leg labels the swap correction exchanged.
+    pub cycle_reject_swaps: bool,
 }
 
 impl Default for KinematicsConfig {
@@ -187,6 +214,17 @@ impl Default for KinematicsConfig {
             min_cycles: 2,
             min_stride_s: 0.5,
             max_stride_s: 3.0,
+            frame_size: None,
+            bout_min_speed: 0.25,
+            bout_edge_margin: 0.02,
+            bout_min_s: 1.0,
+            bout_bridge_s: 0.2,
+            bouts: None,
+            cycle_max_stride_deviation: 0.2,
+            cycle_max_filled_s: 0.1,
+            cycle_min_likelihood: 0.5,
+            cycle_segment_tolerance: 0.2,
+            cycle_reject_swaps: true,
         }
     }
 }
@@ -213,6 +251,56 @@ impl KinematicsConfig {
         }
         if !(self.min_stride_s > 0.0 && self.max_stride_s > self.min_stride_s) {
             return bad("max_stride_s", "need 0 < min_stride_s < max_stride_s");
+        }
+        self.validate_bouts()?;
+        self.validate_quality()
+    }
+
+    fn validate_bouts(&self) -> Result<(), KinError> {
+        let bad = |key: &str, why: &str| Err(KinError::Config(format!("kinematics.{key}: {why}")));
+        if let Some([w, h]) = self.frame_size
+            && (w == 0 || h == 0)
+        {
+            return bad("frame_size", "width and height must be positive");
+        }
+        for (k, v) in [
+            ("bout_min_speed", self.bout_min_speed),
+            ("bout_min_s", self.bout_min_s),
+            ("bout_bridge_s", self.bout_bridge_s),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(k, "must be a non-negative number");
+            }
+        }
+        if !(0.0..0.5).contains(&self.bout_edge_margin) {
+            return bad("bout_edge_margin", "must be in [0, 0.5)");
+        }
+        if let Some(b) = &self.bouts {
+            if b.iter().any(|r| r[0] > r[1]) {
+                return bad("bouts", "each bout is [first, last] with first <= last");
+            }
+            let mut sorted = b.clone();
+            sorted.sort_unstable();
+            if sorted.windows(2).any(|w| w[1][0] <= w[0][1]) {
+                return bad("bouts", "bouts must not overlap");
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_quality(&self) -> Result<(), KinError> {
+        let bad = |key: &str, why: &str| Err(KinError::Config(format!("kinematics.{key}: {why}")));
+        if !(self.cycle_max_stride_deviation.is_finite() && self.cycle_max_stride_deviation > 0.0) {
+            return bad("cycle_max_stride_deviation", "must be a positive number");
+        }
+        if !(self.cycle_max_filled_s.is_finite() && self.cycle_max_filled_s >= 0.0) {
+            return bad("cycle_max_filled_s", "must be a non-negative number");
+        }
+        if !(0.0..=1.0).contains(&self.cycle_min_likelihood) {
+            return bad("cycle_min_likelihood", "must be in [0, 1]");
+        }
+        if !(0.0..1.0).contains(&self.cycle_segment_tolerance) {
+            return bad("cycle_segment_tolerance", "must be in [0, 1)");
         }
         Ok(())
     }
@@ -254,5 +342,49 @@ mod tests {
         assert!(e.contains("butterworth") && e.contains("one_euro"), "{e}");
         let back: KinematicsConfig = toml::from_str(&toml::to_string(&k).unwrap()).unwrap();
         assert_eq!(back, k);
+    }
+
+    #[test]
+    fn default_toml_documents_the_kinematics_defaults() {
+        let text = include_str!("../../../configs/default.toml");
+        let table: toml::Table = toml::from_str(text).unwrap();
+        let k: KinematicsConfig = table["kinematics"].clone().try_into().unwrap();
+        assert_eq!(k, KinematicsConfig::default());
+        for key in ["frame_size", "bouts", "bout_bridge_s", "cycle_reject_swaps"] {
+            assert!(text.contains(&format!("{key} =")), "{key}");
+        }
+    }
+
+    #[test]
+    fn bout_and_quality_keys() {
+        let k: KinematicsConfig =
+            toml::from_str("frame_size = [1768, 994]\nbouts = [[10, 80], [100, 200]]").unwrap();
+        assert_eq!(k.frame_size, Some([1768, 994]));
+        assert_eq!(k.bouts, Some(vec![[10, 80], [100, 200]]));
+        assert!(k.validate().is_ok());
+        let back: KinematicsConfig = toml::from_str(&toml::to_string(&k).unwrap()).unwrap();
+        assert_eq!(back, k);
+        let d = KinematicsConfig::default();
+        assert_eq!(
+            (d.bout_min_speed, d.bout_edge_margin, d.bout_min_s),
+            (0.25, 0.02, 1.0)
+        );
+        assert!(d.cycle_reject_swaps && d.bouts.is_none() && d.frame_size.is_none());
+        for (text, key) in [
+            ("bouts = [[5, 4]]", "bouts"),
+            ("bouts = [[1, 10], [10, 20]]", "overlap"),
+            ("frame_size = [0, 10]", "frame_size"),
+            ("bout_edge_margin = 0.5", "bout_edge_margin"),
+            ("cycle_segment_tolerance = 1.0", "cycle_segment_tolerance"),
+            ("cycle_min_likelihood = 1.5", "cycle_min_likelihood"),
+            (
+                "cycle_max_stride_deviation = 0.0",
+                "cycle_max_stride_deviation",
+            ),
+        ] {
+            let k: KinematicsConfig = toml::from_str(text).unwrap();
+            let e = k.validate().unwrap_err().to_string();
+            assert!(e.contains(key), "{text}: {e}");
+        }
     }
 }

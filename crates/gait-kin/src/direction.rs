@@ -48,6 +48,31 @@ pub struct Directions {
     pub frontal: Vec<bool>,
 }
 
+impl Directions {
+    /// Frames walking right / left / unknown.
+    pub fn counts(&self) -> [usize; 3] {
+        let mut counts = [0usize; 3];
+        for d in &self.per_frame {
+            counts[match d {
+                Direction::Right => 0,
+                Direction::Left => 1,
+                Direction::Unknown => 2,
+            }] += 1;
+        }
+        counts
+    }
+
+    /// The leg nearer the camera in most frames with a known direction.
+    pub fn near_side(&self) -> Option<Side> {
+        let c = self.counts();
+        match c[0].cmp(&c[1]) {
+            std::cmp::Ordering::Greater => Direction::Right.near_side(),
+            std::cmp::Ordering::Less => Direction::Left.near_side(),
+            std::cmp::Ordering::Equal => None,
+        }
+    }
+}
+
 /// -1, 0 or +1 (`f64::signum` gives +1 for 0).
 fn sign(v: f64) -> f64 {
     if v > 0.0 {

@@ -137,7 +137,7 @@ fn forward_speed(t: &Tracks, dirs: &[Direction], j: usize, i: usize) -> f64 {
 /// Per-frame forward image speed of the ground under the feet: the slower foot's speed (the
 /// stance foot never moves faster than the ground, a swinging one does), median over +-0.5 s
 /// to bridge double support and noise. 0 where no foot is seen.
-fn ground_speed(t: &Tracks, dirs: &[Direction]) -> Vec<f64> {
+pub(crate) fn ground_speed(t: &Tracks, dirs: &[Direction]) -> Vec<f64> {
     let n = t.len();
     let feet: Vec<Vec<usize>> = Side::BOTH
         .iter()

@@ -1,12 +1,21 @@
 //! Keypoint post-processing, sagittal joint angles, gait events and cycles.
 //!
 //! [`analyse`] runs the whole chain on a [`PoseSequence`]: likelihood gate -> left/right swap
-//! correction -> gap filling -> low-pass filter -> walking direction -> angles -> events ->
-//! cycles -> spatiotemporal parameters. Each step is a trait ([`SwapCorrector`], [`GapFiller`],
-//! [`Smoother`], [`EventDetector`]) so a researcher can replace it; [`analyse_with`] takes them.
-//! [`write_outputs`] writes the CSV files of `gait kin`.
+//! correction -> gap filling -> low-pass filter -> walking direction -> angles -> walking
+//! bouts -> events (kept inside bouts) -> candidate strides -> per-stride quality control ->
+//! cycles and spatiotemporal parameters of the accepted strides. Each step is a trait
+//! ([`SwapCorrector`], [`GapFiller`], [`Smoother`], [`EventDetector`]) so a researcher can
+//! replace it; [`analyse_with`] takes them. [`write_outputs`] writes the CSV files of `gait kin`.
+//!
+//! Bouts ([`bouts`]) are the frames of steady walking in one direction across the view: a real
+//! video also shows the subject entering, standing, turning, hidden or leaving, and perhaps
+//! someone else afterwards. Quality control ([`quality`]) then keeps or rejects each stride
+//! (heel strike to the next of the same foot) with its reasons; only accepted strides enter
+//! the mean curves and the spatiotemporal parameters. Events from `kinematics.events_csv` are
+//! the user's and are kept as given, unless `kinematics.bouts` is set too.
 
 pub mod angles;
+pub mod bouts;
 pub mod butterworth;
 pub mod config;
 pub mod cycles;
@@ -15,10 +24,13 @@ pub mod events;
 pub mod likelihood;
 pub mod one_euro;
 mod output;
+pub mod quality;
 pub mod smooth;
 pub mod spatiotemporal;
 pub mod spline;
 pub mod swap;
+#[cfg(test)]
+mod testing;
 pub mod tracks;
 
 use std::path::PathBuf;
@@ -27,12 +39,14 @@ use gait_core::{PoseSequence, StageError};
 use serde::Serialize;
 
 pub use angles::Angles;
+pub use bouts::Bout;
 pub use config::{FilterKind, GapFillKind, KinematicsConfig, PostprocessConfig, Side};
 pub use cycles::{CycleCurve, Stride};
 pub use direction::Direction;
 pub use events::{Event, EventDetector, EventKind, ZeniRefined};
 pub use likelihood::{KeypointGate, LikelihoodThreshold};
 pub use output::write_outputs;
+pub use quality::{CycleQuality, Reason, SideCounts};
 pub use smooth::Smoother;
 pub use spatiotemporal::Param;
 pub use spline::GapFiller;
@@ -83,10 +97,19 @@ pub struct KinResult {
     pub near_side: Option<Side>,
     #[serde(skip)]
     pub angles: Angles,
+    /// Frames of steady walking; detected events outside every bout are dropped.
+    pub bouts: Vec<Bout>,
+    /// Gait events inside the bouts (all of them when read from `kinematics.events_csv`).
     pub events: Vec<Event>,
     /// True when the events came from `kinematics.events_csv`.
     pub events_from_file: bool,
+    /// Candidate strides: consecutive heel strikes of a foot within the stride time limits.
     pub strides: Vec<Stride>,
+    /// The quality verdict on each candidate stride, in the order of `strides`.
+    pub cycle_quality: Vec<CycleQuality>,
+    pub cycles_accepted: SideCounts,
+    pub cycles_rejected: SideCounts,
+    /// Mean curves over the accepted strides.
     pub cycles: Vec<CycleCurve>,
     pub spatiotemporal: Vec<Param>,
     /// Pixels per cm when a scale was configured.
@@ -152,6 +175,104 @@ pub fn analyse_with(
     kin: &KinematicsConfig,
     steps: &Steps,
 ) -> Result<KinResult, KinError> {
+    check_input(seq, post, kin)?;
+    let fps = seq.fps;
+    let mut warnings = Vec::new();
+    let c = clean(seq, post, steps, &mut warnings);
+    let (t, n) = (&c.clean, c.clean.len());
+    let dirs = directions(t, &mut warnings);
+    let angles = angles::compute(t, &dirs.per_frame);
+    warn_missing_toes(t, &mut warnings);
+
+    let frames = bouts::Frames {
+        clean: t,
+        gated: &c.gated,
+        dirs: &dirs.per_frame,
+        max_gap: post.max_gap(fps),
+    };
+    let bouts = bouts::find(&frames, kin);
+    // Detected events count only where the subject walks; a user's events file says itself
+    // where that is, unless bouts are given by hand too.
+    let enforce_bouts = kin.events_csv.is_none() || kin.bouts.is_some();
+    if n > 0 && bouts.is_empty() {
+        warnings.push(if enforce_bouts {
+            "no walking bout found: no events or cycles".into()
+        } else {
+            "no walking bout found: the events of events_csv are used as given".into()
+        });
+    }
+    let (mut events, from_file) = match &kin.events_csv {
+        Some(p) => (events::read_csv(p)?, true),
+        None => (steps.events.detect(t, &dirs.per_frame), false),
+    };
+    if enforce_bouts {
+        events.retain(|e| bouts::bout_of(&bouts, e.frame).is_some());
+    }
+    for side in Side::BOTH {
+        if !events
+            .iter()
+            .any(|e| e.side == side && e.event == EventKind::HeelStrike)
+        {
+            warnings.push(format!("no heel strike found for the {} leg", side.name()));
+        }
+    }
+    let strides = cycles::strides(&events, fps, kin.min_stride_s, kin.max_stride_s);
+    let evidence = quality::Evidence {
+        clean: t,
+        gated: &c.gated,
+        raw_likelihood: &c.raw_likelihood,
+        swapped: &c.swapped,
+        bouts: &bouts,
+        enforce_bouts,
+    };
+    let cycle_quality = quality::assess(&evidence, &strides, kin);
+    warnings.extend(quality::warnings(&cycle_quality, kin));
+    let (cycles_accepted, cycles_rejected) = quality::counts(&cycle_quality);
+    let accepted = quality::accepted(&cycle_quality);
+    let cycles = cycles::curves(
+        &angles,
+        t.first_frame,
+        &accepted,
+        kin.min_cycles,
+        &mut warnings,
+    );
+    let step_ok =
+        |a: usize, b: usize| quality::step_ok(&cycle_quality, &bouts, enforce_bouts, a, b);
+    let spatiotemporal = spatiotemporal::compute(t, &events, &accepted, &step_ok, kin);
+    let px_per_cm = spatiotemporal::px_per_cm(t, kin);
+    if (kin.subject_height_m.is_some() || kin.known_length_px.is_some()) && px_per_cm.is_none() {
+        warnings.push("no leg length could be measured: lengths stay in pixels".into());
+    }
+    let counts = dirs.counts();
+    Ok(KinResult {
+        fps,
+        first_frame: t.first_frame,
+        n_frames: n,
+        swapped_frames: c.swapped.iter().filter(|&&s| s).count(),
+        direction_counts: counts,
+        near_side: dirs.near_side(),
+        direction: dirs.per_frame,
+        angles,
+        bouts,
+        events,
+        events_from_file: from_file,
+        strides,
+        cycle_quality,
+        cycles_accepted,
+        cycles_rejected,
+        cycles,
+        spatiotemporal,
+        px_per_cm,
+        warnings,
+        filtered: t.to_sequence(),
+    })
+}
+
+fn check_input(
+    seq: &PoseSequence,
+    post: &PostprocessConfig,
+    kin: &KinematicsConfig,
+) -> Result<(), KinError> {
     let fps = seq.fps;
     if !(fps.is_finite() && fps > 0.0) {
         return Err(KinError::BadInput(format!(
@@ -173,8 +294,30 @@ pub fn analyse_with(
             seq.len()
         )));
     }
-    let mut warnings = Vec::new();
+    Ok(())
+}
+
+/// The keypoints after cleaning, plus what the quality rules need from before it.
+struct Cleaned {
+    /// Gated, swap-corrected, gap-filled and smoothed.
+    clean: Tracks,
+    /// Gated and swap-corrected, before gap filling: what the pose model really gave.
+    gated: Tracks,
+    /// The model's likelihoods before the gate, leg labels swap-corrected.
+    raw_likelihood: Vec<Vec<f64>>,
+    swapped: Vec<bool>,
+}
+
+/// Likelihood gate -> swap correction -> gap filling -> smoothing.
+fn clean(
+    seq: &PoseSequence,
+    post: &PostprocessConfig,
+    steps: &Steps,
+    warnings: &mut Vec<String>,
+) -> Cleaned {
+    let fps = seq.fps;
     let mut t = Tracks::from_sequence(seq);
+    let mut raw = t.clone();
     let n = t.len();
     if n == 0 {
         warnings.push("no frames in the input".into());
@@ -197,6 +340,10 @@ pub fn analyse_with(
             "left/right leg labels corrected in {swapped_frames} frames"
         ));
     }
+    for i in (0..n).filter(|&i| swapped[i]) {
+        swap::swap_frame(&mut raw, i);
+    }
+    let gated = t.clone();
 
     let max_gap = post.max_gap(fps);
     for j in 0..t.names.len() {
@@ -228,34 +375,34 @@ pub fn analyse_with(
             smooth::smooth_segments(steps.smoother, coord, fps);
         }
     }
-
-    let dirs = direction::detect(&t);
-    let mut counts = [0usize; 3];
-    for d in &dirs.per_frame {
-        counts[match d {
-            Direction::Right => 0,
-            Direction::Left => 1,
-            Direction::Unknown => 2,
-        }] += 1;
+    Cleaned {
+        clean: t,
+        gated,
+        raw_likelihood: raw.likelihood,
+        swapped,
     }
+}
+
+/// Per-frame direction, with warnings for front views and no direction at all.
+fn directions(t: &Tracks, warnings: &mut Vec<String>) -> direction::Directions {
+    let dirs = direction::detect(t);
     let frontal = dirs.frontal.iter().filter(|&&f| f).count();
     if frontal > 0 {
         warnings.push(format!(
             "{frontal} frames look like a front or back view (hips far apart): no sagittal angles there"
         ));
     }
-    if n > 0 && counts[2] == n {
+    let n = t.len();
+    if n > 0 && dirs.counts()[2] == n {
         warnings
             .push("walking direction unknown in every frame: no angles, events or cycles".into());
     }
-    let near_side = match counts[0].cmp(&counts[1]) {
-        std::cmp::Ordering::Greater => Direction::Right.near_side(),
-        std::cmp::Ordering::Less => Direction::Left.near_side(),
-        std::cmp::Ordering::Equal => None,
-    };
-    let angles = angles::compute(&t, &dirs.per_frame);
-    // Without a toe there is no foot segment: say so instead of leaving the
-    // reader to wonder why the ankle column is empty (OpenPose COCO-18 has no feet).
+    dirs
+}
+
+/// Without a toe there is no foot segment: say so instead of leaving the reader to wonder why
+/// the ankle column is empty (OpenPose COCO-18 has no feet).
+fn warn_missing_toes(t: &Tracks, warnings: &mut Vec<String>) {
     for side in ["left", "right"] {
         let toe = format!("{side}_toe");
         let seen = t
@@ -263,54 +410,60 @@ pub fn analyse_with(
             .iter()
             .position(|name| *name == toe)
             .is_some_and(|j| t.x[j].iter().any(|v| v.is_finite()));
-        if n > 0 && !seen {
+        if !t.is_empty() && !seen {
             warnings.push(format!(
                 "no {toe} keypoint in any frame (the pose model may have no feet, e.g. OpenPose COCO-18): the {side} ankle angle is unavailable"
             ));
         }
     }
+}
 
-    let (events, from_file) = match &kin.events_csv {
-        Some(p) => (events::read_csv(p)?, true),
-        None => (steps.events.detect(&t, &dirs.per_frame), false),
-    };
-    for side in Side::BOTH {
-        if !events
-            .iter()
-            .any(|e| e.side == side && e.event == EventKind::HeelStrike)
-        {
-            warnings.push(format!("no heel strike found for the {} leg", side.name()));
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Walk 3 s, stand 2 s, walk 3 s: two bouts, events only inside them, and no accepted
+    /// stride across the standing.
+    #[test]
+    fn events_and_cycles_stay_inside_the_bouts() {
+        let pos = |i: usize| {
+            let moving = i.min(90) + i.saturating_sub(150);
+            100.0 + 400.0 * moving as f64 / 30.0
+        };
+        let seq = testing::walker(30.0, 240, pos).to_sequence();
+        let kin = KinematicsConfig::default();
+        let r = analyse(&seq, &PostprocessConfig::default(), &kin).unwrap();
+        assert_eq!(r.bouts.len(), 2, "{:?}", r.bouts);
+        assert!(
+            r.bouts[0].last < 100 && r.bouts[1].first > 140,
+            "{:?}",
+            r.bouts
+        );
+        assert!(!r.events.is_empty());
+        assert!(
+            r.events
+                .iter()
+                .all(|e| bouts::bout_of(&r.bouts, e.frame).is_some())
+        );
+        for q in &r.cycle_quality {
+            assert_eq!(q.accepted, q.bout.is_some(), "{q:?}");
         }
+        assert!(
+            r.cycles_accepted.left >= 2 && r.cycles_accepted.right >= 2,
+            "{r:?}"
+        );
+        assert_eq!(r.cycles.len(), 6);
+
+        // Standing only: no bout, no events, and the warning says so.
+        let still = testing::walker(30.0, 90, |_| 500.0).to_sequence();
+        let r = analyse(&still, &PostprocessConfig::default(), &kin).unwrap();
+        assert!(r.bouts.is_empty() && r.events.is_empty() && r.cycle_quality.is_empty());
+        assert!(
+            r.warnings
+                .iter()
+                .any(|w| w == "no walking bout found: no events or cycles"),
+            "{:?}",
+            r.warnings
+        );
     }
-    let strides = cycles::strides(&events, fps, kin.min_stride_s, kin.max_stride_s);
-    let cycles = cycles::curves(
-        &angles,
-        t.first_frame,
-        &strides,
-        kin.min_cycles,
-        &mut warnings,
-    );
-    let spatiotemporal = spatiotemporal::compute(&t, &events, &strides, kin);
-    let px_per_cm = spatiotemporal::px_per_cm(&t, kin);
-    if (kin.subject_height_m.is_some() || kin.known_length_px.is_some()) && px_per_cm.is_none() {
-        warnings.push("no leg length could be measured: lengths stay in pixels".into());
-    }
-    Ok(KinResult {
-        fps,
-        first_frame: t.first_frame,
-        n_frames: n,
-        swapped_frames,
-        direction: dirs.per_frame,
-        direction_counts: counts,
-        near_side,
-        angles,
-        events,
-        events_from_file: from_file,
-        strides,
-        cycles,
-        spatiotemporal,
-        px_per_cm,
-        warnings,
-        filtered: t.to_sequence(),
-    })
 }

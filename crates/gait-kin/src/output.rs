@@ -39,6 +39,29 @@ fn atomic(
     fs::rename(&tmp, &dst).map_err(io(format!("renaming to {}", dst.display())))
 }
 
+const CYCLE_QUALITY_HEADER: &str = "side,first_frame,last_frame,accepted,reasons,stride_s,\
+stride_deviation,max_filled_s,mean_likelihood,thigh_ratio,shank_ratio,swapped_frames,bout";
+
+fn cycle_quality_row(q: &crate::CycleQuality) -> String {
+    let reasons: Vec<&str> = q.reasons.iter().map(|r| r.name()).collect();
+    format!(
+        "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        q.side.name(),
+        q.first_frame,
+        q.last_frame,
+        q.accepted,
+        reasons.join(";"),
+        num(q.stride_s),
+        num(q.stride_deviation),
+        num(q.max_filled_s),
+        num(q.mean_likelihood),
+        num(q.thigh_ratio),
+        num(q.shank_ratio),
+        q.swapped_frames,
+        q.bout.map_or(String::new(), |b| b.to_string())
+    )
+}
+
 fn lines(buf: &mut Vec<u8>, rows: impl IntoIterator<Item = String>) {
     for r in rows {
         buf.extend_from_slice(r.as_bytes());
@@ -46,7 +69,8 @@ fn lines(buf: &mut Vec<u8>, rows: impl IntoIterator<Item = String>) {
     }
 }
 
-/// Writes angles.csv, events.csv, cycles.csv, spatiotemporal.csv and keypoints_filtered.csv.
+/// Writes angles.csv, events.csv, bouts.csv, cycle_quality.csv, cycles.csv,
+/// spatiotemporal.csv and keypoints_filtered.csv.
 pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
     fs::create_dir_all(out_dir).map_err(|e| KinError::Io {
         context: format!("creating {}", out_dir.display()),
@@ -98,6 +122,27 @@ pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
                 )
             }),
         );
+        Ok(())
+    })?;
+    atomic(out_dir, "bouts.csv", |b| {
+        lines(b, ["bout,first,last,direction,mean_speed".to_string()]);
+        lines(
+            b,
+            r.bouts.iter().enumerate().map(|(k, bout)| {
+                let dir = match bout.direction {
+                    crate::Direction::Right => "right",
+                    crate::Direction::Left => "left",
+                    crate::Direction::Unknown => "unknown",
+                };
+                let speed = num(bout.mean_speed);
+                format!("{k},{},{},{dir},{speed}", bout.first, bout.last)
+            }),
+        );
+        Ok(())
+    })?;
+    atomic(out_dir, "cycle_quality.csv", |b| {
+        lines(b, [CYCLE_QUALITY_HEADER.to_string()]);
+        lines(b, r.cycle_quality.iter().map(cycle_quality_row));
         Ok(())
     })?;
     atomic(out_dir, "cycles.csv", |b| {

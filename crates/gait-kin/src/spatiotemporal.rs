@@ -47,11 +47,13 @@ pub fn px_per_cm(t: &Tracks, cfg: &KinematicsConfig) -> Option<f64> {
     (leg.is_finite() && leg > 0.0).then(|| leg / (LEG_PER_HEIGHT * h * 100.0))
 }
 
-/// All parameters; lengths in cm when a scale is known, else in px.
+/// All parameters over the given strides, and the steps (other foot's heel strike to this
+/// foot's, input frames) `step_ok` accepts; lengths in cm when a scale is known, else in px.
 pub fn compute(
     t: &Tracks,
     events: &[Event],
     strides: &[Stride],
+    step_ok: &dyn Fn(usize, usize) -> bool,
     cfg: &KinematicsConfig,
 ) -> Vec<Param> {
     let fps = t.fps;
@@ -98,7 +100,7 @@ pub fn compute(
             .filter(|e| e.event == EventKind::HeelStrike)
             .collect();
         for w in hs.windows(2) {
-            if w[1].side == side && w[0].side != side {
+            if w[1].side == side && w[0].side != side && step_ok(w[0].frame, w[1].frame) {
                 let dur = (w[1].frame - w[0].frame) as f64 / fps;
                 if dur > 0.0 && dur <= cfg.max_stride_s / 2.0 {
                     step_t.push(dur);

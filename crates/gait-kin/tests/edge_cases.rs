@@ -81,6 +81,12 @@ fn standing_still() {
     let seq = make(90, 30.0, |i, k| side_pose(k, 0.3 * (i as f64 * 0.7).sin()));
     let r = check_no_cycles(&seq, "no heel strike found for the left leg");
     assert!(r.events.is_empty());
+    assert!(r.bouts.is_empty() && r.cycle_quality.is_empty());
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w == "no walking bout found: no events or cycles")
+    );
     // Standing straight: the direction comes from the feet, the angles are defined and small.
     assert_eq!(r.direction_counts[2], 0);
     assert!(
@@ -157,6 +163,7 @@ fn walking_toward_the_camera() {
     });
     let r = check_no_cycles(&seq, "front or back view");
     assert!(r.events.is_empty());
+    assert!(r.bouts.is_empty(), "{:?}", r.bouts);
     assert!(r.angles.left.knee.iter().all(|v| v.is_nan()));
 }
 

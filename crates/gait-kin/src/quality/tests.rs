@@ -1,0 +1,171 @@
+//! Each rejection reason on a synthetic walker.
+
+use super::*;
+use crate::direction::Direction;
+use crate::testing::walker;
+
+/// A 30 fps walker at 400 px/s over 6 s, seen as one bout, and the data to judge it.
+struct Case {
+    t: Tracks,
+    gated: Tracks,
+    lik: Vec<Vec<f64>>,
+    swapped: Vec<bool>,
+    bouts: Vec<Bout>,
+}
+
+impl Case {
+    fn new() -> Self {
+        let t = walker(30.0, 180, |i| 100.0 + 400.0 * i as f64 / 30.0);
+        let n = t.len();
+        Case {
+            gated: t.clone(),
+            lik: vec![vec![0.9; n]; t.names.len()],
+            swapped: vec![false; n],
+            bouts: vec![bout(0, 179)],
+            t,
+        }
+    }
+
+    fn judge(&self, strides: &[Stride], kin: &KinematicsConfig) -> Vec<CycleQuality> {
+        let ev = Evidence {
+            clean: &self.t,
+            gated: &self.gated,
+            raw_likelihood: &self.lik,
+            swapped: &self.swapped,
+            bouts: &self.bouts,
+            enforce_bouts: true,
+        };
+        assess(&ev, strides, kin)
+    }
+
+    fn reasons(&self, strides: &[Stride]) -> Vec<Vec<Reason>> {
+        let q = self.judge(strides, &KinematicsConfig::default());
+        q.into_iter().map(|c| c.reasons).collect()
+    }
+}
+
+fn bout(first: usize, last: usize) -> Bout {
+    Bout {
+        first,
+        last,
+        direction: Direction::Right,
+        mean_speed: 1.3,
+    }
+}
+
+/// Four left strides of 34 frames (1.13 s, the walker's) from frame 10.
+fn strides() -> Vec<Stride> {
+    (0..4)
+        .map(|k| Stride {
+            side: Side::Left,
+            start: 10 + 34 * k,
+            end: 44 + 34 * k,
+        })
+        .collect()
+}
+
+fn only(k: usize, r: Vec<Reason>) -> Vec<Vec<Reason>> {
+    (0..4)
+        .map(|i| if i == k { r.clone() } else { vec![] })
+        .collect()
+}
+
+#[test]
+fn clean_strides_are_accepted_with_their_numbers() {
+    let c = Case::new();
+    let q = c.judge(&strides(), &KinematicsConfig::default());
+    assert!(q.iter().all(|q| q.accepted && q.bout == Some(0)), "{q:?}");
+    let q0 = &q[0];
+    assert!((q0.stride_s - 34.0 / 30.0).abs() < 1e-12 && q0.stride_deviation == 0.0);
+    assert!((q0.mean_likelihood - 0.9).abs() < 1e-12 && q0.max_filled_s == 0.0);
+    assert!((q0.thigh_ratio - 1.0).abs() < 0.1 && (q0.shank_ratio - 1.0).abs() < 0.1);
+    assert_eq!(counts(&q).0, SideCounts { left: 4, right: 0 });
+    assert!(warnings(&q, &KinematicsConfig::default()).is_empty());
+}
+
+#[test]
+fn an_odd_stride_time_is_rejected() {
+    let c = Case::new();
+    let mut s = strides();
+    s[3].end += 12; // 46 frames against a median of 34: 35 % longer
+    assert_eq!(c.reasons(&s), only(3, vec![Reason::StrideTime]));
+}
+
+#[test]
+fn a_long_filled_gap_is_rejected_a_short_one_kept() {
+    let mut c = Case::new();
+    let k = c.gated.index("left_knee").unwrap();
+    c.gated.x[k][20..23].fill(f64::NAN); // 3 frames = 0.1 s: at the limit
+    c.gated.x[k][50..55].fill(f64::NAN); // 5 frames = 0.17 s
+    assert_eq!(c.reasons(&strides()), only(1, vec![Reason::FilledGap]));
+    // The other leg's gaps are no reason for this leg's stride.
+    let mut c = Case::new();
+    let k = c.gated.index("right_knee").unwrap();
+    c.gated.x[k][50..60].fill(f64::NAN);
+    assert_eq!(c.reasons(&strides()), only(4, vec![]));
+}
+
+#[test]
+fn low_likelihood_is_rejected() {
+    let mut c = Case::new();
+    for p in LEG {
+        let j = c.t.leg_index(Side::Left, p).unwrap();
+        c.lik[j][80..110].fill(0.2);
+    }
+    assert_eq!(c.reasons(&strides()), only(2, vec![Reason::LowLikelihood]));
+}
+
+#[test]
+fn a_segment_out_of_line_is_rejected() {
+    let mut c = Case::new();
+    let (h, k) = (
+        c.t.index("left_hip").unwrap(),
+        c.t.index("left_knee").unwrap(),
+    );
+    for i in 44..78 {
+        // Thigh 40 % longer over the second stride.
+        c.t.y[k][i] = c.t.y[h][i] + 1.4 * (c.t.y[k][i] - c.t.y[h][i]);
+    }
+    let q = c.judge(&strides(), &KinematicsConfig::default());
+    assert_eq!(q[1].reasons, vec![Reason::SegmentLength], "{:?}", q[1]);
+    assert!(q[1].thigh_ratio > 1.3, "{}", q[1].thigh_ratio);
+    assert!(q.iter().filter(|q| q.accepted).count() == 3);
+}
+
+#[test]
+fn swaps_reject_unless_allowed() {
+    let mut c = Case::new();
+    c.swapped[100] = true;
+    assert_eq!(c.reasons(&strides()), only(2, vec![Reason::Swap]));
+    let kin = KinematicsConfig {
+        cycle_reject_swaps: false,
+        ..Default::default()
+    };
+    let q = c.judge(&strides(), &kin);
+    assert!(q.iter().all(|q| q.accepted) && q[2].swapped_frames == 1);
+}
+
+#[test]
+fn a_stride_across_two_bouts_is_rejected() {
+    let mut c = Case::new();
+    c.bouts = vec![bout(0, 60), bout(62, 179)];
+    let q = c.judge(&strides(), &KinematicsConfig::default());
+    assert_eq!(q[1].reasons, vec![Reason::CrossesBout]);
+    assert_eq!(
+        q.iter().map(|q| q.bout).collect::<Vec<_>>(),
+        vec![Some(0), None, Some(1), Some(1)]
+    );
+    let w = warnings(&q, &KinematicsConfig::default());
+    assert_eq!(w.len(), 1);
+    assert!(
+        w[0].starts_with("1 of 4 strides rejected (crosses_bout)"),
+        "{w:?}"
+    );
+    // A step inside the rejected stride does not count; one in an accepted stride does,
+    // none across the bouts, and one outside every stride does when inside a bout.
+    assert!(!step_ok(&q, &c.bouts, true, 50, 55));
+    assert!(step_ok(&q, &c.bouts, true, 90, 100));
+    assert!(!step_ok(&q, &c.bouts, true, 59, 63));
+    assert!(step_ok(&q, &c.bouts, true, 160, 175));
+    assert!(!step_ok(&q, &c.bouts, true, 170, 185));
+}
