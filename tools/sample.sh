@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The README's main command: set-up on a fresh machine, then the default
-# pipeline on the bundled sample video (the walking part, frames 100-229).
+# pipeline on the whole bundled sample video (the subject pass finds the walker
+# and her walking bouts; no frame range is needed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source tools/setup.sh
@@ -8,6 +9,5 @@ source tools/setup.sh
 # (Cargo.toml), so it is fast and shares its build with tools/test.sh.
 cargo build -p gait-cli
 target/debug/gait models fetch blazepose
-target/debug/gait run --input data/sample/sports2d-demo.mp4 --out runs/sample \
-  --set input.first_frame=100 "$@"
+target/debug/gait run --input data/sample/sports2d-demo.mp4 --out runs/sample "$@"
 echo "results in runs/sample (keypoints.csv, angles.csv, cycles.csv, report.html, run.json)"

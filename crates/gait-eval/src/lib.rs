@@ -19,6 +19,7 @@ mod options;
 pub mod plot;
 pub mod report;
 mod stats;
+mod subject_lines;
 mod table;
 
 pub use align::{Aligned, align, canonicalize};

@@ -24,7 +24,11 @@ pub struct Table {
 #[derive(Debug, Clone)]
 pub struct Report {
     pub title: String,
-    pub prosthetic_side: Side,
+    /// The prosthetic leg, when the run names one; otherwise the sides are
+    /// shown as left and right only.
+    pub prosthetic_side: Option<Side>,
+    /// Who was analysed and when they walked (from run.json), as lines.
+    pub subject: Vec<String>,
     /// This run's joint angles over the gait cycle (gait-kin's cycles).
     pub cycles: Vec<CycleCurve>,
     /// Ground-truth cycles and other methods' cycles, for the comparison figure.
@@ -48,7 +52,8 @@ impl Default for Report {
     fn default() -> Self {
         Self {
             title: "Gait analysis report".into(),
-            prosthetic_side: Side::Right,
+            prosthetic_side: None,
+            subject: vec![],
             cycles: vec![],
             truth_cycles: vec![],
             method_cycles: vec![],
@@ -104,10 +109,24 @@ impl Report {
     /// The page as one HTML string.
     pub fn html(&self) -> Result<String, EvalError> {
         let mut body = format!("<h1>{}</h1>", escape(&self.title));
+        let sides = match self.prosthetic_side {
+            Some(p) => format!(
+                "Prosthetic side: <b>{}</b>, intact side: <b>{}</b>.",
+                p.as_str(),
+                p.other().as_str()
+            ),
+            None => "Sides: left and right (no prosthetic side set; <code>--set kinematics.prosthetic_side=\"left\"</code> names it).".into(),
+        };
         body.push_str(&format!(
-            "<p>Prosthetic side: <b>{}</b>. Joint angles in degrees; hip and knee flexion and ankle dorsiflexion positive.</p>",
-            self.prosthetic_side.as_str()
+            "<p>{sides} Joint angles in degrees; hip and knee flexion and ankle dorsiflexion positive.</p>"
         ));
+        if !self.subject.is_empty() {
+            body.push_str("<h2>Subject and walking bouts</h2><ul>");
+            for line in &self.subject {
+                body.push_str(&format!("<li>{}</li>", escape(line)));
+            }
+            body.push_str("</ul>");
+        }
         body.push_str("<h2>Warnings</h2>");
         if self.warnings.is_empty() {
             body.push_str("<p>None.</p>");
@@ -121,9 +140,13 @@ impl Report {
         if !self.cycles.is_empty() {
             body.push_str("<h2>Kinematics over the gait cycle</h2>");
             let fig = kinematics_plot(&self.cycles, self.prosthetic_side)?;
+            let colours = match self.prosthetic_side {
+                Some(_) => "prosthetic red, intact blue",
+                None => "left blue, right red",
+            };
             body.push_str(&figure(
                 &fig,
-                "Mean (line) and SD (band) over complete cycles; prosthetic red, intact blue.",
+                &format!("Mean (line) and SD (band) over the accepted cycles; {colours}."),
             ));
         }
         if !self.truth_cycles.is_empty() && !self.method_cycles.is_empty() {
@@ -131,7 +154,7 @@ impl Report {
             let fig = comparison_plot(
                 &self.truth_cycles,
                 &self.method_cycles,
-                self.prosthetic_side,
+                self.prosthetic_side.unwrap_or(Side::Right),
             )?;
             body.push_str(&figure(
                 &fig,
@@ -218,7 +241,7 @@ impl Report {
     /// `warnings` arrays, anywhere, are listed), `cycles.csv`,
     /// `spatiotemporal.csv` and `events.csv` when present, and a skeleton strip
     /// from `keypoints.csv`. Files that are absent are left out.
-    pub fn from_run_dir(dir: &Path, prosthetic_side: Side) -> Result<Report, EvalError> {
+    pub fn from_run_dir(dir: &Path, prosthetic_side: Option<Side>) -> Result<Report, EvalError> {
         let mut r = Report {
             prosthetic_side,
             title: format!("Gait analysis report: {}", dir.display()),
@@ -230,6 +253,7 @@ impl Report {
                 .map_err(|e| EvalError::io(format!("reading {}", run.display()), e))?;
             let v: Value = serde_json::from_str(&text).map_err(|e| EvalError::input(&run, e))?;
             collect_warnings(&v, &mut r.warnings);
+            r.subject = crate::subject_lines::describe(&v);
             r.manifest = Some(v);
         }
         let cycles = dir.join("cycles.csv");
@@ -237,7 +261,15 @@ impl Report {
             r.cycles = crate::plot::read_cycles_csv(&cycles)?;
         }
         for (file, title) in [
-            ("spatiotemporal.csv", "Spatiotemporal parameters"),
+            (
+                "spatiotemporal.csv",
+                "Spatiotemporal parameters (accepted cycles)",
+            ),
+            (
+                "cycle_quality.csv",
+                "Cycle quality: every cycle found, kept or rejected",
+            ),
+            ("bouts.csv", "Walking bouts"),
             ("events.csv", "Gait events"),
         ] {
             let p = dir.join(file);
@@ -331,7 +363,7 @@ mod tests {
             "parameter,side,value,unit\ncadence,,104.2,steps/min\n",
         )
         .unwrap();
-        let html = Report::from_run_dir(dir.path(), Side::Left)
+        let html = Report::from_run_dir(dir.path(), Some(Side::Left))
             .unwrap()
             .html()
             .unwrap();
@@ -347,7 +379,7 @@ mod tests {
         assert!(!html.contains("<script"), "no script in the report");
         let empty = tempfile::tempdir().unwrap();
         assert!(
-            Report::from_run_dir(empty.path(), Side::Right)
+            Report::from_run_dir(empty.path(), None)
                 .unwrap()
                 .html()
                 .unwrap()

@@ -49,7 +49,7 @@ fn dark_pixels(fig: &Figure) -> usize {
 
 #[test]
 fn kinematics_and_comparison_plots() {
-    let k = kinematics_plot(&curves(0.0), Side::Right).unwrap();
+    let k = kinematics_plot(&curves(0.0), Some(Side::Right)).unwrap();
     assert!(
         count_colour(&k, [214, 39, 40]) > 500,
         "prosthetic line visible"

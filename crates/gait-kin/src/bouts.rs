@@ -406,7 +406,7 @@ mod tests {
 
     #[test]
     fn leaving_the_image_ends_the_bout() {
-        // Walking right across a 1280 px frame: the toe reaches 1280 - 0.02 * 1280 first.
+        // Walking right across a 1280 px frame: the toe reaches 1280 - 0.01 * 1280 first.
         let t = walker(30.0, 120, steady);
         let kin = KinematicsConfig {
             frame_size: Some([1280, 720]),
@@ -416,7 +416,7 @@ mod tests {
         assert_eq!(b.len(), 1, "{b:?}");
         let toe = t.index("right_toe").unwrap();
         let last = b[0].1;
-        let margin = 0.02 * 1280.0;
+        let margin = kin.bout_edge_margin * 1280.0;
         assert!(t.x[toe][last] <= 1280.0 - margin, "{}", t.x[toe][last]);
         assert!((last + 1..120).any(|i| t.x[toe][i] > 1280.0 - margin));
         assert!(last < 100, "{b:?}");

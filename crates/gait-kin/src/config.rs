@@ -199,8 +199,10 @@ pub struct KinematicsConfig {
     /// A stride whose median thigh or shank length differs from the bout's median by more than
     /// this fraction is rejected.
     pub cycle_segment_tolerance: f64,
-    /// Reject strides containing frames whose leg labels the swap correction exchanged.
-    pub cycle_reject_swaps: bool,
+    /// A stride in which the swap correction exchanged the leg labels in more than this share
+    /// of its frames is rejected (0: any corrected frame rejects). A few single-frame label
+    /// flips, corrected, are ordinary for BlazePose's far leg; many mean the labels are unsure.
+    pub cycle_max_swapped_share: f64,
 }
 
 impl Default for KinematicsConfig {
@@ -216,7 +218,7 @@ impl Default for KinematicsConfig {
             max_stride_s: 3.0,
             frame_size: None,
             bout_min_speed: 0.25,
-            bout_edge_margin: 0.02,
+            bout_edge_margin: 0.01,
             bout_min_s: 1.0,
             bout_bridge_s: 0.2,
             bouts: None,
@@ -224,7 +226,7 @@ impl Default for KinematicsConfig {
             cycle_max_filled_s: 0.1,
             cycle_min_likelihood: 0.5,
             cycle_segment_tolerance: 0.2,
-            cycle_reject_swaps: true,
+            cycle_max_swapped_share: 0.1,
         }
     }
 }
@@ -302,6 +304,9 @@ impl KinematicsConfig {
         if !(0.0..1.0).contains(&self.cycle_segment_tolerance) {
             return bad("cycle_segment_tolerance", "must be in [0, 1)");
         }
+        if !(0.0..=1.0).contains(&self.cycle_max_swapped_share) {
+            return bad("cycle_max_swapped_share", "must be in [0, 1]");
+        }
         Ok(())
     }
 }
@@ -350,7 +355,12 @@ mod tests {
         let table: toml::Table = toml::from_str(text).unwrap();
         let k: KinematicsConfig = table["kinematics"].clone().try_into().unwrap();
         assert_eq!(k, KinematicsConfig::default());
-        for key in ["frame_size", "bouts", "bout_bridge_s", "cycle_reject_swaps"] {
+        for key in [
+            "frame_size",
+            "bouts",
+            "bout_bridge_s",
+            "cycle_max_swapped_share",
+        ] {
             assert!(text.contains(&format!("{key} =")), "{key}");
         }
     }
@@ -367,9 +377,9 @@ mod tests {
         let d = KinematicsConfig::default();
         assert_eq!(
             (d.bout_min_speed, d.bout_edge_margin, d.bout_min_s),
-            (0.25, 0.02, 1.0)
+            (0.25, 0.01, 1.0)
         );
-        assert!(d.cycle_reject_swaps && d.bouts.is_none() && d.frame_size.is_none());
+        assert!(d.cycle_max_swapped_share == 0.1 && d.bouts.is_none() && d.frame_size.is_none());
         for (text, key) in [
             ("bouts = [[5, 4]]", "bouts"),
             ("bouts = [[1, 10], [10, 20]]", "overlap"),

@@ -285,7 +285,11 @@ fn verdict(q: &CycleQuality, kin: &KinematicsConfig, enforce_bouts: bool) -> Vec
             Reason::SegmentLength,
             off(q.thigh_ratio) || off(q.shank_ratio),
         ),
-        (Reason::Swap, kin.cycle_reject_swaps && q.swapped_frames > 0),
+        (
+            Reason::Swap,
+            q.swapped_frames as f64
+                > kin.cycle_max_swapped_share * (q.last_frame - q.first_frame + 1) as f64 + eps,
+        ),
         (Reason::CrossesBout, enforce_bouts && q.bout.is_none()),
     ]
     .into_iter()

@@ -139,7 +139,7 @@ fn sample_video_bouts_stop_before_the_other_person() {
     for reject_swaps in [true, false] {
         let r = sample(KinematicsConfig {
             frame_size: Some([1768, 994]),
-            cycle_reject_swaps: reject_swaps,
+            cycle_max_swapped_share: if reject_swaps { 0.0 } else { 1.0 },
             ..Default::default()
         });
         let name = format!("sample-blazepose (reject swaps {reject_swaps})");

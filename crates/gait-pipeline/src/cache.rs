@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use gait_core::{Keypoint, Pose, Resize};
 use serde::Serialize;
+use serde::de::DeserializeOwned;
 use sha2::{Digest, Sha256};
 
 use crate::input::hex;
@@ -149,6 +150,24 @@ impl StageCache {
             return Ok(());
         };
         atomic::write(&path, state).map_err(|e| cache_err(&path, e))
+    }
+
+    /// A JSON record of frame `index` (e.g. the people found in it).
+    pub(crate) fn load_json<T: DeserializeOwned>(&self, index: usize) -> Option<T> {
+        let bytes = std::fs::read(self.file(index, "json")?).ok()?;
+        serde_json::from_slice(&bytes).ok()
+    }
+
+    pub(crate) fn store_json(
+        &self,
+        index: usize,
+        value: &impl Serialize,
+    ) -> Result<(), PipelineError> {
+        let Some(path) = self.file(index, "json") else {
+            return Ok(());
+        };
+        let json = serde_json::to_vec(value).unwrap_or_default();
+        atomic::write(&path, &json).map_err(|e| cache_err(&path, e))
     }
 
     pub(crate) fn store_pose(&self, index: usize, pose: &Pose) -> Result<(), PipelineError> {

@@ -12,6 +12,7 @@ use gait_diffuse::RegeneratorConfig;
 use gait_edge::EdgeConfig;
 use gait_kin::{KinematicsConfig, PostprocessConfig};
 use gait_pose::PoseConfig;
+use gait_subject::SubjectConfig;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -66,6 +67,8 @@ impl Default for RunConfig {
 pub struct PipelineConfig {
     pub input: InputConfig,
     pub run: RunConfig,
+    /// How people are linked into tracks to follow one subject (gait-subject).
+    pub subject: SubjectConfig,
     /// Which frames are regenerated and which are interpolated.
     pub selection: SelectionConfig,
     pub edge: EdgeConfig,
@@ -77,9 +80,10 @@ pub struct PipelineConfig {
     pub kinematics: KinematicsConfig,
 }
 
-const TABLES: [&str; 8] = [
+const TABLES: [&str; 9] = [
     "input",
     "run",
+    "subject",
     "selection",
     "edge",
     "regenerator",
@@ -144,6 +148,7 @@ impl PipelineConfig {
         let config = Self {
             input: table_as(origin, "input", take("input")?)?,
             run: table_as(origin, "run", take("run")?)?,
+            subject: table_as(origin, "subject", take("subject")?)?,
             selection: table_as(origin, "selection", take("selection")?)?,
             edge: table_as(origin, "edge", take("edge")?)?,
             regenerator: table_as(origin, "regenerator", take("regenerator")?)?,
@@ -176,6 +181,9 @@ impl PipelineConfig {
                 "[input] fps must be a positive number",
             ));
         }
+        self.subject
+            .validate()
+            .map_err(|e| PipelineError::config(origin, format!("[subject] {e}")))?;
         self.selection
             .validate()
             .map_err(|e| PipelineError::config(origin, format!("[selection] {e}")))?;

@@ -5,7 +5,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
-use gait_core::{EdgeMap, Frame, Pose};
+use gait_core::{EdgeMap, Frame, PersonBox, Pose};
 use indicatif::ProgressBar;
 
 use crate::cache::StageCache;
@@ -74,6 +74,9 @@ pub(crate) struct Driver<'a> {
     /// Poses on the original frames, for regenerators that need them
     /// (inpainting a leg mask); `None` when the regenerator does not.
     pub(crate) original_poses: Option<BTreeMap<usize, Pose>>,
+    /// Where the subject is in each frame; frames without it get an empty
+    /// pose and skip every stage. `None`: no subject tracking.
+    pub(crate) subject: Option<&'a BTreeMap<usize, PersonBox>>,
 }
 
 impl Driver<'_> {
@@ -96,6 +99,13 @@ impl Driver<'_> {
             .collect();
         self.record(record).cached += cached.len();
         self.cached_frames.extend(cached);
+        let subject = self.subject;
+        let in_view = |f: &Frame| subject.is_none_or(|s| s.contains_key(&f.index));
+        for (slot, frame) in poses.iter_mut().zip(frames) {
+            if slot.is_none() && !in_view(frame) {
+                *slot = Some(Pose::empty(self.n_keypoints));
+            }
+        }
         let todo: Vec<&Frame> = frames
             .iter()
             .zip(&poses)
@@ -138,7 +148,14 @@ impl Driver<'_> {
                 };
                 for chunk in run.chunks(step) {
                     let t = Instant::now();
-                    let found = self.stages.pose.estimate(chunk)?;
+                    let found = match subject {
+                        Some(s) => {
+                            let at: Vec<Option<PersonBox>> =
+                                chunk.iter().map(|f| s.get(&f.index).copied()).collect();
+                            self.stages.pose.estimate_subject(chunk, &at)?
+                        }
+                        None => self.stages.pose.estimate(chunk)?,
+                    };
                     self.record(record).seconds += t.elapsed().as_secs_f64();
                     self.record(record).computed += chunk.len();
                     if found.len() != chunk.len()

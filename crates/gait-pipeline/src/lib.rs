@@ -11,9 +11,12 @@ mod error;
 pub mod input;
 pub mod interpolate;
 pub mod manifest;
+mod passes;
+mod plan;
 pub mod registry;
 pub mod runner;
 pub mod selection;
+mod subject;
 
 pub use config::PipelineConfig;
 pub use error::PipelineError;

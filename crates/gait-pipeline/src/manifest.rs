@@ -30,6 +30,9 @@ pub struct RunManifest {
     /// Which frames were regenerated, kept their original-frame pose or
     /// were interpolated, and why frames were judged poor.
     pub selection: SelectionRecord,
+    /// The people tracked over the input and the subject among them (absent
+    /// when the pose stage cannot list people, or `[subject] enabled = false`).
+    pub subject: Option<gait_subject::Subject>,
     pub keypoint_names: Vec<String>,
     pub warnings: Vec<String>,
     /// Summaries added by later steps (kinematics, reports).

@@ -33,6 +33,15 @@ impl PoseConfig {
         }
     }
 
+    /// Whom the run follows (`person`); plugins follow the default, the walker.
+    pub fn person(&self) -> PersonChoice {
+        match self {
+            PoseConfig::Blazepose(c) => c.person,
+            PoseConfig::Openpose(c) => c.person,
+            PoseConfig::Plugin(_) => PersonChoice::default(),
+        }
+    }
+
     /// Model files the estimator reads (checksummed into `run.json`).
     pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
         match self {

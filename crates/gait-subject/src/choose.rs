@@ -34,31 +34,7 @@ pub fn choose(
         PersonChoice::Rule(r) => r,
     };
     let pick = match rule {
-        PersonRule::Walker => {
-            let walker =
-                best(&|t| t.walk.displacement).filter(|&i| tracks[i].walk.displacement >= MIN_WALK);
-            return Some(match walker {
-                Some(i) => (
-                    i,
-                    format!(
-                        "walker: the longest walk across the view ({:.1} body sizes in {:.1} s, frames {}-{})",
-                        tracks[i].walk.displacement,
-                        tracks[i].walk.seconds,
-                        tracks[i].walk.first_frame,
-                        tracks[i].walk.last_frame
-                    ),
-                ),
-                None => {
-                    let i = best(&|t| t.frames as f32)?;
-                    (
-                        i,
-                        format!(
-                            "walker: nobody walks across the view (no walk of {MIN_WALK} body sizes or more); the longest track instead"
-                        ),
-                    )
-                }
-            });
-        }
+        PersonRule::Walker => return Some(walker(tracks, &candidates)),
         PersonRule::Largest => best(&|t| t.mean_size),
         PersonRule::Leftmost => best(&|t| -t.mean_centre[0]),
         PersonRule::Rightmost => best(&|t| t.mean_centre[0]),
@@ -75,6 +51,44 @@ pub fn choose(
             MIN_SHARE * 100.0
         ),
     ))
+}
+
+/// The track with the longest walk across the view. Without a walk of
+/// [`MIN_WALK`] body sizes (a short clip, or nobody walking) the track moving
+/// most across the view, and without any steady movement the longest track.
+fn walker(tracks: &[TrackSummary], candidates: &[usize]) -> (usize, String) {
+    let by = |key: &dyn Fn(&TrackSummary) -> f32| {
+        candidates
+            .iter()
+            .copied()
+            .max_by(|&a, &b| key(&tracks[a]).total_cmp(&key(&tracks[b])).then(b.cmp(&a)))
+            .unwrap_or(0)
+    };
+    let i = by(&|t| t.walk.displacement);
+    let w = &tracks[i].walk;
+    let numbers = format!(
+        "{:.1} body sizes in {:.1} s, frames {}-{}",
+        w.displacement, w.seconds, w.first_frame, w.last_frame
+    );
+    if w.displacement >= MIN_WALK {
+        (
+            i,
+            format!("walker: the longest walk across the view ({numbers})"),
+        )
+    } else if w.displacement > 0.0 {
+        (
+            i,
+            format!(
+                "walker: nobody walks {MIN_WALK} body sizes or more; the person moving most across the view ({numbers})"
+            ),
+        )
+    } else {
+        let i = by(&|t| t.frames as f32);
+        (
+            i,
+            "walker: nobody walks across the view; the longest track instead".into(),
+        )
+    }
 }
 
 /// The track whose box in `at.frame` is nearest `(at.x, at.y)`.

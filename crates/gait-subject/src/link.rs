@@ -33,6 +33,11 @@ pub struct LinkLimits {
     pub max_colour_distance: f32,
 }
 
+/// Sightings whose body axis leans further than this from upright (radians)
+/// are detector errors for a walking subject (e.g. a box turned upside
+/// down on a half-hidden body): they are not linked into any track.
+const MAX_TILT: f32 = std::f32::consts::FRAC_PI_4;
+
 /// Gaps up to this many frames are ordinary detector misses: position and
 /// size decide. Longer ones need the appearance to match too.
 const SHORT_GAP: usize = 3;
@@ -85,7 +90,7 @@ impl Track {
         let d = (p[0] - s.person.centre[0]).hypot(p[1] - s.person.centre[1]) / size;
         // The prediction grows uncertain with the gap; a walker covers about
         // 0.02 body sizes a frame, a runner 0.07.
-        let reach = (0.35 + 0.04 * dt as f32).min(1.5);
+        let reach = (0.35 + 0.04 * dt as f32).min(1.0);
         let ratio = (s.person.size().max(1.0) / size).ln().abs();
         if d > reach || ratio > limits.max_size_ratio.ln() {
             return None;
@@ -103,6 +108,7 @@ impl Track {
 pub fn link(frames: &[(usize, Vec<Sighting>)], limits: &LinkLimits) -> Vec<Track> {
     let mut tracks: Vec<Track> = Vec::new();
     for (frame, seen) in frames {
+        let seen: Vec<Sighting> = seen.iter().filter(|s| upright(s)).copied().collect();
         // Every plausible (track, sighting) pair, cheapest first: a greedy
         // assignment, which is exact whenever the people are well apart.
         let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
@@ -133,6 +139,14 @@ pub fn link(frames: &[(usize, Vec<Sighting>)], limits: &LinkLimits) -> Vec<Track
         }
     }
     tracks
+}
+
+/// Whether the body axis (centre to top, up the image) leans less than
+/// [`MAX_TILT`] from vertical.
+fn upright(s: &Sighting) -> bool {
+    let [cx, cy] = s.person.centre;
+    let [tx, ty] = s.person.top;
+    (tx - cx).abs().atan2(cy - ty) < MAX_TILT
 }
 
 #[cfg(test)]
@@ -199,6 +213,27 @@ pub(crate) mod tests {
                 .iter()
                 .skip(1)
                 .all(|t| t.sightings.iter().all(|s| s.appearance.0[0] == 0.7))
+        );
+    }
+
+    #[test]
+    fn upside_down_boxes_are_not_linked() {
+        let mut flipped = seen(5, 500.0, 400.0, 0.5);
+        flipped.person.top[1] = 700.0;
+        let frames = vec![
+            (4, vec![seen(4, 500.0, 400.0, 0.5)]),
+            (5, vec![flipped]),
+            (6, vec![seen(6, 500.0, 400.0, 0.5)]),
+        ];
+        let tracks = link(&frames, &LIMITS);
+        assert_eq!(tracks.len(), 1);
+        assert_eq!(
+            tracks[0]
+                .sightings
+                .iter()
+                .map(|s| s.frame)
+                .collect::<Vec<_>>(),
+            [4, 6]
         );
     }
 

@@ -32,10 +32,10 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     }
     // The report reads what the run wrote, so it shows exactly the files a
     // reader of the run folder gets.
-    let side = match config.kinematics.prosthetic_side {
-        Some(gait_kin::Side::Left) => gait_eval::Side::Left,
-        _ => gait_eval::Side::Right,
-    };
+    let side = config.kinematics.prosthetic_side.map(|s| match s {
+        gait_kin::Side::Left => gait_eval::Side::Left,
+        gait_kin::Side::Right => gait_eval::Side::Right,
+    });
     let report = gait_eval::Report::from_run_dir(&p.out, side)
         .and_then(|r| r.write(&p.out))
         .map_err(|e| CliError(format!("writing the report: {}", one_line(&e.to_string()))))?;

@@ -195,7 +195,21 @@ fn panel<DB: DrawingBackend>(
 
 struct Kinematics<'a> {
     curves: &'a [CycleCurve],
-    prosthetic: Side,
+    prosthetic: Option<Side>,
+}
+
+impl Kinematics<'_> {
+    /// Colour and legend name of a side: prosthetic / intact when the
+    /// prosthetic side is set, else plain left / right (as the skeleton strip
+    /// draws them).
+    fn role(&self, side: Side) -> (RGBColor, String) {
+        match self.prosthetic {
+            Some(p) if side == p => (PROSTHETIC, format!("prosthetic ({})", side.as_str())),
+            Some(_) => (INTACT, format!("intact ({})", side.as_str())),
+            None if side == Side::Left => (INTACT, "left".into()),
+            None => (PROSTHETIC, "right".into()),
+        }
+    }
 }
 
 impl Draw for Kinematics<'_> {
@@ -204,23 +218,23 @@ impl Draw for Kinematics<'_> {
         root: &DrawingArea<DB, Shift>,
         _bitmap: bool,
     ) -> Result<(), String> {
+        let order = match self.prosthetic {
+            Some(p) => [p.other(), p],
+            None => [Side::Left, Side::Right],
+        };
         for (area, joint) in root.split_evenly((1, 3)).iter().zip(JOINTS) {
-            let series: Vec<Series> = [self.prosthetic.other(), self.prosthetic]
+            let series: Vec<Series> = order
                 .iter()
                 .filter_map(|&side| {
                     let c = self
                         .curves
                         .iter()
                         .find(|c| c.side == side && c.joint == joint)?;
-                    let (color, role) = if side == self.prosthetic {
-                        (PROSTHETIC, "prosthetic")
-                    } else {
-                        (INTACT, "intact")
-                    };
+                    let (color, role) = self.role(side);
                     Some(Series {
                         curve: c,
                         color,
-                        label: format!("{role} ({}, n={})", side.as_str(), c.n_cycles),
+                        label: format!("{role}, n={}", c.n_cycles),
                         band: true,
                     })
                 })
@@ -231,9 +245,13 @@ impl Draw for Kinematics<'_> {
     }
 }
 
-/// Hip, knee and ankle angles over the gait cycle, mean and SD band,
-/// prosthetic (red) against intact (blue) side.
-pub fn kinematics_plot(curves: &[CycleCurve], prosthetic_side: Side) -> Result<Figure, EvalError> {
+/// Hip, knee and ankle angles over the gait cycle, mean and SD band; with
+/// a prosthetic side, prosthetic (red) against intact (blue), else left
+/// (blue) and right (red).
+pub fn kinematics_plot(
+    curves: &[CycleCurve],
+    prosthetic_side: Option<Side>,
+) -> Result<Figure, EvalError> {
     render(
         &Kinematics {
             curves,

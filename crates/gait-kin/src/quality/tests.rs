@@ -136,13 +136,23 @@ fn a_segment_out_of_line_is_rejected() {
 fn swaps_reject_unless_allowed() {
     let mut c = Case::new();
     c.swapped[100] = true;
+    // One corrected frame is within the default share; with none allowed it rejects.
+    let strict = KinematicsConfig {
+        cycle_max_swapped_share: 0.0,
+        ..Default::default()
+    };
+    let q = c.judge(&strides(), &strict);
+    assert_eq!(q[2].reasons, vec![Reason::Swap]);
+    for k in 95..=105 {
+        c.swapped[k] = true;
+    }
     assert_eq!(c.reasons(&strides()), only(2, vec![Reason::Swap]));
     let kin = KinematicsConfig {
-        cycle_reject_swaps: false,
+        cycle_max_swapped_share: 1.0,
         ..Default::default()
     };
     let q = c.judge(&strides(), &kin);
-    assert!(q.iter().all(|q| q.accepted) && q[2].swapped_frames == 1);
+    assert!(q.iter().all(|q| q.accepted) && q[2].swapped_frames == 11);
 }
 
 #[test]

@@ -1,7 +1,10 @@
 //! The OpenPose estimator: network + decoding per frame, then the choice of
 //! the person to follow (see [`crate::person`]).
 
-use gait_core::{Frame, Pose, PoseEstimator, StageContext, StageError};
+use std::collections::HashMap;
+use std::hash::{DefaultHasher, Hash, Hasher};
+
+use gait_core::{Frame, PersonBox, Pose, PoseEstimator, StageContext, StageError};
 
 use super::config::OpenposeConfig;
 use super::decode::{self, Person};
@@ -14,6 +17,10 @@ pub struct Openpose {
     config: OpenposeConfig,
     /// Centre of the person followed in the previous frame (pixels).
     last_centre: Option<(f32, f32)>,
+    /// The people the subject pass found, by frame, with a hash of the image
+    /// they were found in: the pose pass on the same (not regenerated) frame
+    /// reuses them instead of running the network twice.
+    found: HashMap<usize, (u64, Vec<Person>)>,
 }
 
 impl Openpose {
@@ -24,6 +31,53 @@ impl Openpose {
             net: net::load_on(&path, config.model, config.backend, ctx.device)?,
             config: config.clone(),
             last_centre: None,
+            found: HashMap::new(),
+        })
+    }
+
+    /// Everybody the network finds in `frame`.
+    fn everyone(&mut self, frame: &Frame) -> Result<Vec<Person>, StageError> {
+        let hash = image_hash(frame);
+        if let Some((h, people)) = self.found.remove(&frame.index)
+            && h == hash
+        {
+            return Ok(people);
+        }
+        let net = &mut self.net;
+        let found = decode::detect(
+            frame,
+            self.config.model,
+            &self.config.search,
+            &mut |input| net.run(input),
+        )?;
+        Ok(found.people)
+    }
+
+    /// The person whose box lies on the subject's, as a pose.
+    fn estimate_at(
+        &mut self,
+        frame: &Frame,
+        subject: Option<&PersonBox>,
+    ) -> Result<Pose, StageError> {
+        let model = self.config.model;
+        let Some(s) = subject else {
+            self.found.remove(&frame.index);
+            return Ok(Pose {
+                keypoints: names::to_keypoints(model, &[]),
+            });
+        };
+        let people = self.everyone(frame)?;
+        let size = s.size().max(1.0);
+        let nearest = people
+            .iter()
+            .map(|p| {
+                let c = candidate(p);
+                ((c.cx - s.centre[0]).hypot(c.cy - s.centre[1]), p)
+            })
+            .filter(|(d, _)| *d < 0.5 * size)
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        Ok(Pose {
+            keypoints: names::to_keypoints(model, nearest.map_or(&[][..], |(_, p)| &p.keypoints)),
         })
     }
 
@@ -54,6 +108,12 @@ impl Openpose {
     }
 }
 
+fn image_hash(frame: &Frame) -> u64 {
+    let mut h = DefaultHasher::new();
+    frame.image.as_raw().hash(&mut h);
+    h.finish()
+}
+
 /// A person's box centre and size from its keypoints.
 fn candidate(p: &Person) -> Candidate {
     let pts: Vec<[f32; 3]> = p.keypoints.iter().flatten().copied().collect();
@@ -78,6 +138,34 @@ impl PoseEstimator for Openpose {
 
     fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError> {
         frames.iter().map(|f| self.estimate_one(f)).collect()
+    }
+
+    /// The people's boxes: centre and size of each one's keypoints.
+    fn people(&mut self, frame: &Frame) -> Result<Option<Vec<PersonBox>>, StageError> {
+        let people = self.everyone(frame)?;
+        let boxes = people
+            .iter()
+            .map(|p| {
+                let c = candidate(p);
+                // A keypoint box is tighter than a body crop; the detector's
+                // crops (BlazePose) hold the body with a margin.
+                PersonBox::upright(c.cx, c.cy, 1.25 * c.size, p.score / p.parts.max(1) as f32)
+            })
+            .collect();
+        self.found.insert(frame.index, (image_hash(frame), people));
+        Ok(Some(boxes))
+    }
+
+    fn estimate_subject(
+        &mut self,
+        frames: &[Frame],
+        subject: &[Option<PersonBox>],
+    ) -> Result<Vec<Pose>, StageError> {
+        frames
+            .iter()
+            .zip(subject)
+            .map(|(f, s)| self.estimate_at(f, s.as_ref()))
+            .collect()
     }
 
     fn reset(&mut self) {

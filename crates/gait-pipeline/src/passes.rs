@@ -1,0 +1,207 @@
+//! The pose passes over the input: poses on the original frames where the
+//! run needs them (poor-frame selection, inpainting masks), then the pass
+//! through edges -> regenerator -> pose. Each pass starts the estimator
+//! afresh and hands it that pass's frames in order.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use gait_core::{PersonBox, Pose};
+use indicatif::ProgressBar;
+
+use crate::driver::{Caches, Driver, Order};
+use crate::input::InputInfo;
+use crate::manifest::StageRecord;
+use crate::plan::{ORIGINAL_POSE, StageCaches};
+use crate::registry::Stages;
+use crate::selection::{self, SelectionMode, SelectionRecord};
+use crate::{PipelineConfig, PipelineError};
+
+/// What the passes found.
+pub(crate) struct PassOutput {
+    /// Every frame index of the range.
+    pub(crate) all: Vec<usize>,
+    /// The poses of the processed frames, in frame order.
+    pub(crate) processed: Vec<(usize, Pose)>,
+    /// How many of them came from the cache.
+    pub(crate) from_cache: usize,
+    /// Poses on the original frames, when a pass found them.
+    pub(crate) original: Option<Vec<(usize, Pose)>>,
+    /// Why frames were judged poor (poor mode).
+    pub(crate) selection: SelectionRecord,
+}
+
+/// What every pass shares: the stages, caches and per-stage records.
+pub(crate) struct Passes<'a> {
+    pub(crate) config: &'a PipelineConfig,
+    pub(crate) info: &'a InputInfo,
+    pub(crate) stages: &'a mut Stages,
+    pub(crate) caches: &'a StageCaches,
+    pub(crate) records: &'a mut BTreeMap<String, StageRecord>,
+    pub(crate) n_keypoints: usize,
+    pub(crate) names: &'a [String],
+    /// Where the subject is in each frame; `None` without subject tracking.
+    pub(crate) subject: Option<&'a BTreeMap<usize, PersonBox>>,
+    /// Makes a progress bar for a pass named by its argument.
+    pub(crate) bar: &'a dyn Fn(&str) -> ProgressBar,
+}
+
+impl Passes<'_> {
+    /// Runs the passes the configuration asks for.
+    pub(crate) fn run(&mut self) -> Result<PassOutput, PipelineError> {
+        if self.config.selection.mode == SelectionMode::Poor {
+            self.poor_frames()
+        } else if self.config.regenerator.needs_poses() {
+            self.inpainting()
+        } else {
+            let (all, processed, cached) = self.pass(true, self.grid(), None, &|_| true)?;
+            Ok(PassOutput {
+                all,
+                from_cache: cached.len(),
+                processed,
+                original: None,
+                selection: SelectionRecord::default(),
+            })
+        }
+    }
+
+    fn grid(&self) -> Order {
+        Order::Grid {
+            first: self.config.input.first_frame,
+            stride: self.config.selection.stride,
+        }
+    }
+
+    /// One pass: `regenerate` = through edges and regenerator into the pose
+    /// cache, else the original frames into the original-pose cache. Frames
+    /// on the grid (and the last) are processed if `wanted`.
+    fn pass(
+        &mut self,
+        regenerate: bool,
+        order: Order,
+        original_poses: Option<BTreeMap<usize, Pose>>,
+        wanted: &dyn Fn(usize) -> bool,
+    ) -> Result<(Vec<usize>, Vec<(usize, Pose)>, BTreeSet<usize>), PipelineError> {
+        let label = match (regenerate, self.config.selection.mode) {
+            (false, _) => "original frames",
+            (true, SelectionMode::Poor) => "regenerating poor frames",
+            (true, _) => "",
+        };
+        let bar = (self.bar)(label);
+        let (first, stride) = (self.config.input.first_frame, self.config.selection.stride);
+        let on_grid = |index: usize, last: bool| last || (index - first).is_multiple_of(stride);
+        let driver = Driver {
+            config: self.config,
+            stages: self.stages,
+            caches: Caches {
+                edge: &self.caches.edge,
+                regenerator: &self.caches.regenerator,
+                pose: if regenerate {
+                    &self.caches.pose
+                } else {
+                    &self.caches.original
+                },
+            },
+            records: self.records,
+            n_keypoints: self.n_keypoints,
+            regenerate,
+            pose_record: if regenerate { "pose" } else { ORIGINAL_POSE },
+            order,
+            last_estimated: None,
+            cached_frames: BTreeSet::new(),
+            original_poses,
+            subject: self.subject,
+        };
+        let found = driver.stream(self.info, &bar, &|f, last| on_grid(f, last) && wanted(f))?;
+        bar.finish_and_clear();
+        Ok(found)
+    }
+
+    /// Poses on the original frames, then the regeneration pass over the
+    /// frames whose pose is poor; the rest keep their original pose.
+    fn poor_frames(&mut self) -> Result<PassOutput, PipelineError> {
+        let (all, original, cached_original) = self.pass(false, self.grid(), None, &|_| true)?;
+        let mut selection = SelectionRecord::default();
+        let poor = self.judge(&original, &mut selection)?;
+        let mut regenerated: BTreeMap<usize, Pose> = BTreeMap::new();
+        let mut cached_regenerated = BTreeSet::new();
+        if !poor.is_empty() {
+            let wanted: BTreeSet<usize> = poor.iter().copied().collect();
+            let order = Order::Subset {
+                frames: poor,
+                stride: self.config.selection.stride,
+            };
+            let masks = self
+                .config
+                .regenerator
+                .needs_poses()
+                .then(|| original.iter().cloned().collect());
+            let (_, found, cached) = self.pass(true, order, masks, &|f| wanted.contains(&f))?;
+            regenerated.extend(found);
+            cached_regenerated = cached;
+        }
+        let mut from_cache = 0;
+        let processed = original
+            .iter()
+            .map(|(f, p)| match regenerated.remove(f) {
+                Some(r) => {
+                    from_cache += usize::from(cached_regenerated.contains(f));
+                    (*f, r)
+                }
+                None => {
+                    from_cache += usize::from(cached_original.contains(f));
+                    (*f, p.clone())
+                }
+            })
+            .collect();
+        Ok(PassOutput {
+            all,
+            processed,
+            from_cache,
+            original: Some(original),
+            selection,
+        })
+    }
+
+    /// The poor frames among the original-frame poses, recorded per reason.
+    /// Frames without the subject in view are not poor: there is nobody to
+    /// regenerate.
+    fn judge(
+        &self,
+        original: &[(usize, Pose)],
+        record: &mut SelectionRecord,
+    ) -> Result<Vec<usize>, PipelineError> {
+        let sel = &self.config.selection;
+        let poses: Vec<Pose> = original.iter().map(|(_, p)| p.clone()).collect();
+        let verdict = selection::judge(&poses, self.names, sel)
+            .map_err(|e| PipelineError::config("[selection]", e))?;
+        let in_view = |f: usize| self.subject.is_none_or(|s| s.contains_key(&f));
+        let mut poor = Vec::new();
+        for ((f, _), reason) in original.iter().zip(&verdict.reasons) {
+            if let Some(r) = reason.filter(|_| in_view(*f)) {
+                poor.push(*f);
+                record.poor.entry(r).or_default().push([*f, *f]);
+                *record.poor_counts.entry(r).or_default() += 1;
+            }
+        }
+        for frames in record.poor.values_mut() {
+            *frames = selection::ranges(frames.iter().map(|r| r[0]));
+        }
+        record.segment_medians_px = Some(verdict.medians);
+        Ok(poor)
+    }
+
+    /// Inpainting without selection: poses on the original frames for the
+    /// leg masks, then every grid frame through the regenerator.
+    fn inpainting(&mut self) -> Result<PassOutput, PipelineError> {
+        let (_, original, _) = self.pass(false, self.grid(), None, &|_| true)?;
+        let masks = original.iter().cloned().collect();
+        let (all, processed, cached) = self.pass(true, self.grid(), Some(masks), &|_| true)?;
+        Ok(PassOutput {
+            all,
+            processed,
+            from_cache: cached.len(),
+            original: Some(original),
+            selection: SelectionRecord::default(),
+        })
+    }
+}

@@ -1,0 +1,150 @@
+//! The whole sample video with the default pipeline: the walker is found
+//! with no frame range, the man who jumps off the box after she has left
+//! never enters an accepted cycle, and the automatic events agree with the
+//! manual annotation in tests/data/sample-events.
+
+mod common;
+
+use std::path::Path;
+
+use common::{gait, models_dir, read_json, run_ok, sample_video};
+
+/// Rows of a CSV file as maps from the header's names to the cells.
+fn csv_rows(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(str::to_string))
+                .collect()
+        })
+        .collect()
+}
+
+fn events(path: &Path) -> Vec<(String, String, i64)> {
+    csv_rows(path)
+        .into_iter()
+        .map(|r| {
+            (
+                r["side"].clone(),
+                r["event"].clone(),
+                r["frame"].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn whole_sample_video_follows_the_walker_only_while_she_walks() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    run_ok(
+        gait()
+            .args(["run", "--no-progress", "--models-dir"])
+            .arg(models_dir())
+            .arg("--input")
+            .arg(sample_video())
+            .arg("--out")
+            .arg(&out),
+    );
+    let run = read_json(&out.join("run.json"));
+
+    // The subject is the woman: a track that starts after the man's (he is
+    // in view from frame 0) and walks across the view to the left.
+    let subject = &run["subject"];
+    let chosen = subject["chosen"].as_u64().unwrap();
+    let track = subject["tracks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["id"].as_u64() == Some(chosen))
+        .unwrap();
+    assert!(subject["walking"].as_bool().unwrap(), "{subject}");
+    assert!(track["first_frame"].as_u64().unwrap() >= 20, "{track}");
+    assert!(track["last_frame"].as_u64().unwrap() <= 205, "{track}");
+    assert_eq!(track["walk"]["direction"].as_i64(), Some(-1), "{track}");
+    assert!(
+        subject["tracks"].as_array().unwrap().len() >= 2,
+        "the man is tracked too"
+    );
+
+    // keypoints.csv has only her: from frame 205 on (she is gone) every
+    // frame is empty.
+    let text = std::fs::read_to_string(out.join("keypoints.csv")).unwrap();
+    for line in text.lines().skip(3) {
+        let mut cells = line.split(',');
+        let frame: usize = cells.next().unwrap().parse().unwrap();
+        if frame >= 205 {
+            assert!(
+                cells.all(|c| c.is_empty() || c == "NaN"),
+                "frame {frame}: {line}"
+            );
+        }
+    }
+
+    // Accepted cycles lie inside her bouts, before she leaves, with stride
+    // times within 20 % of their median.
+    let quality = csv_rows(&out.join("cycle_quality.csv"));
+    let accepted: Vec<_> = quality.iter().filter(|q| q["accepted"] == "true").collect();
+    assert!(accepted.len() >= 2, "{quality:?}");
+    let mut strides: Vec<f64> = accepted
+        .iter()
+        .map(|q| q["stride_s"].parse().unwrap())
+        .collect();
+    strides.sort_by(f64::total_cmp);
+    let median = strides[strides.len() / 2];
+    for q in &accepted {
+        assert!(q["last_frame"].parse::<usize>().unwrap() < 200, "{q:?}");
+        let s: f64 = q["stride_s"].parse().unwrap();
+        assert!((s - median).abs() <= 0.2 * median, "{q:?} median {median}");
+    }
+    for side in ["left", "right"] {
+        assert!(
+            accepted.iter().any(|q| q["side"] == side),
+            "no accepted {side} cycle: {quality:?}"
+        );
+    }
+
+    // Events against the manual annotation, where she is fully in view
+    // (frames 54-186; before, a tree trunk hides her, after, the image edge
+    // cuts her, and no bout covers those frames): every heel strike is
+    // found, and at least 90 % of the annotated events are within 2 frames.
+    let found = events(&out.join("events.csv"));
+    let annotation =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/sample-events/events.csv");
+    let truth: Vec<_> = events(&annotation)
+        .into_iter()
+        .filter(|t| (54..=186).contains(&t.2))
+        .collect();
+    let near = |t: &(String, String, i64)| {
+        found
+            .iter()
+            .any(|f| f.0 == t.0 && f.1 == t.1 && (f.2 - t.2).abs() <= 2)
+    };
+    for t in truth.iter().filter(|t| t.1 == "heel_strike") {
+        assert!(near(t), "annotated {t:?} not found: {found:?}");
+    }
+    let hits = truth.iter().filter(|t| near(t)).count();
+    assert!(
+        hits as f64 >= 0.9 * truth.len() as f64,
+        "{hits} of {} annotated events within 2 frames; found {found:?}",
+        truth.len()
+    );
+
+    // The report names no prosthetic side that nobody set, and lists the bouts.
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        !report.contains("Prosthetic side"),
+        "the report invents a prosthetic side"
+    );
+    assert!(report.contains("Walking bouts") && report.contains("Cycle quality"));
+}
