@@ -81,7 +81,8 @@ pub struct PostprocessConfig {
     pub one_euro_beta: f64,
     /// One-Euro cut-off of the derivative filter in Hz.
     pub one_euro_d_cutoff_hz: f64,
-    /// Detect and undo left/right leg label swaps.
+    /// Detect and undo left/right leg label swaps; first drop the lower legs of frames where
+    /// the pose model drew both legs on one (`gait_kin::collapse`).
     pub swap_correction: bool,
 }
 

@@ -42,15 +42,28 @@ pub trait EventDetector {
 /// forward heel position relative to the pelvis, toe-off at the most backward toe position. At
 /// those extrema the foot moves over the ground exactly as fast as the pelvis; at real contact
 /// the heel is still. So each heel strike is moved forward to where the heel's speed over the
-/// ground has fallen to `speed_fraction` of the walking speed, searched within `refine_s`.
-/// Toe-offs use `toe_speed_fraction` the same way (backwards); its default 1 keeps Zeni's
-/// extremum, because the toe point already moves while the foot rolls over the toes, before
-/// the toe leaves the ground (on the independent trials in tests/independent_mocap.rs the
-/// refined toe-off came 2-4 frames early). A fraction of 1 is plain Zeni.
+/// ground has fallen to `speed_fraction` of the walking speed, searched within `refine_s`
+/// (a fraction of 1 keeps Zeni's extremum).
+///
+/// Each toe-off is placed where the toe's speed over the ground rises through
+/// `toe_speed_fraction` of the walking speed, searched within `refine_s` of Zeni's extremum
+/// (backwards when the toe is already faster there, else forwards). The default 1 is Zeni's
+/// own condition (the toe as fast as the pelvis), but against the walking speed, the pelvis'
+/// mean speed over +-0.25 s, instead of the pelvis' speed in that frame: a pose model's hip
+/// keypoints jitter by several pixels a frame, and where the toe moves at about the pelvis'
+/// speed for a few frames (rolling over the toes) that jitter alone decides which frame is the
+/// extremum (BlazePose on the bundled sample: the pelvis moved 1, 23, 1, 24 px in successive
+/// frames where it walks a steady 11). On clean marker data the two agree to a frame. A
+/// fraction below 1 would move toe-offs earlier: the toe point already moves while the foot
+/// rolls over the toes, before the toe leaves the ground (on the independent trials in
+/// tests/independent_mocap.rs that came 2-4 frames early). 0 keeps Zeni's extremum.
 ///
 /// Speeds are taken over the ground, not the image: the ground's image speed is the stance
 /// foot's (per frame the slower foot, median over +-0.5 s), zero for a fixed camera over a
 /// floor, minus the belt speed on a treadmill. The walking speed is the pelvis' speed over it.
+///
+/// Finally [`drop_implausible_toe_offs`] removes toe-offs that follow their own foot's heel
+/// strike by less than `min_stance_share` of the stride.
 #[derive(Debug, Clone)]
 pub struct ZeniRefined {
     pub speed_fraction: f64,
@@ -58,6 +71,8 @@ pub struct ZeniRefined {
     pub refine_s: f64,
     /// Peaks closer than this (seconds) are merged, keeping the larger.
     pub min_stride_s: f64,
+    /// Shortest stance, heel strike to toe-off of one foot, as a share of the stride.
+    pub min_stance_share: f64,
 }
 
 impl Default for ZeniRefined {
@@ -67,6 +82,11 @@ impl Default for ZeniRefined {
             toe_speed_fraction: 1.0,
             refine_s: 0.2,
             min_stride_s: 0.5,
+            // Walking has double support, so each stance is over half the stride (about 60 %
+            // in healthy gait, longer in slow and pathological gait, rarely under 55 % on a
+            // prosthetic side). A toe-off at under 30 % cannot be walking: it comes from
+            // mislabelled legs. Half the shortest real stance leaves room for timing errors.
+            min_stance_share: 0.3,
         }
     }
 }
@@ -213,40 +233,52 @@ impl ZeniRefined {
             }
         };
         let steps = (self.refine_s * fps).round() as usize;
-        // Where foot speed crosses `fraction * walking speed`, as a rounded fractional frame.
-        let refine = |j: usize, p: usize, forward: bool, fraction: f64| -> usize {
-            let vp = walking_speed(p);
-            if fraction >= 1.0 || !(vp.is_finite() && vp > 0.0) {
-                return p;
-            }
-            let target = fraction * vp;
+        // The frame nearest where the foot speed crosses `target`, rising or falling in time,
+        // searched from `p` forwards or backwards for `steps` frames.
+        let crossing = |j: usize, p: usize, target: f64, rising: bool, forward: bool| {
             for k in 0..steps {
                 let (a, b) = if forward {
                     (p + k, p + k + 1)
                 } else {
-                    match (p.checked_sub(k + 1), p.checked_sub(k)) {
-                        (Some(a), Some(b)) => (a, b),
-                        _ => return p,
-                    }
+                    (p.checked_sub(k + 1)?, p - k)
                 };
                 if b >= n {
-                    return p;
+                    return None;
                 }
                 let (va, vb) = (speed(j, a), speed(j, b));
                 if !(va.is_finite() && vb.is_finite()) {
-                    return p;
+                    return None;
                 }
-                let crossed = if forward {
-                    va > target && vb <= target
-                } else {
+                let crossed = if rising {
                     va <= target && vb > target
+                } else {
+                    va > target && vb <= target
                 };
                 if crossed {
                     let f = (va - target) / (va - vb);
-                    return if f < 0.5 { a } else { b };
+                    return Some(if f < 0.5 { a } else { b });
                 }
             }
-            p
+            None
+        };
+        // Heel strike: forwards to where the heel has slowed to `speed_fraction`.
+        let heel_strike = |p: usize| {
+            let vp = walking_speed(p);
+            if self.speed_fraction >= 1.0 || !(vp.is_finite() && vp > 0.0) {
+                return p;
+            }
+            crossing(heel, p, self.speed_fraction * vp, false, true).unwrap_or(p)
+        };
+        // Toe-off: where the toe's speed rises through `toe_speed_fraction`, searched from the
+        // extremum towards the side where the toe is on the wrong side of it.
+        let toe_off = |p: usize| {
+            let vp = walking_speed(p);
+            let v0 = speed(toe, p);
+            if !(self.toe_speed_fraction > 0.0 && vp.is_finite() && vp > 0.0 && v0.is_finite()) {
+                return p;
+            }
+            let target = self.toe_speed_fraction * vp;
+            crossing(toe, p, target, true, v0 <= target).unwrap_or(p)
         };
         let stable = |p: usize| {
             let w = (0.1 * fps).round() as usize;
@@ -257,21 +289,19 @@ impl ZeniRefined {
         let mut out = Vec::new();
         for p in find_peaks(&heel_rel, prom, min_dist) {
             if stable(p) {
-                let frame = refine(heel, p, true, self.speed_fraction);
                 out.push(Event {
                     side,
                     event: EventKind::HeelStrike,
-                    frame: t.first_frame + frame,
+                    frame: t.first_frame + heel_strike(p),
                 });
             }
         }
         for p in find_peaks(&toe_back, prom, min_dist) {
             if stable(p) {
-                let frame = refine(toe, p, false, self.toe_speed_fraction);
                 out.push(Event {
                     side,
                     event: EventKind::ToeOff,
-                    frame: t.first_frame + frame,
+                    frame: t.first_frame + toe_off(p),
                 });
             }
         }
@@ -291,8 +321,41 @@ impl EventDetector for ZeniRefined {
             .flat_map(|&s| self.side_events(t, dirs, &ground, s, leg))
             .collect();
         sort(&mut ev);
+        drop_implausible_toe_offs(&mut ev, self.min_stance_share);
         ev
     }
+}
+
+/// Removes each toe-off that comes less than `min_share` of a stride after the heel strike of
+/// the same foot before it: in walking a foot cannot leave the ground so soon after landing, so
+/// such a toe-off comes from mislabelled legs (the other foot's push-off). The stride is the
+/// time from that heel strike to the foot's next one, else the median over both feet of the
+/// strides between consecutive heel strikes; with no stride at all nothing is removed. `ev`
+/// must be sorted by frame.
+pub fn drop_implausible_toe_offs(ev: &mut Vec<Event>, min_share: f64) {
+    let strikes = |side: Side| -> Vec<usize> {
+        ev.iter()
+            .filter(|e| e.side == side && e.event == EventKind::HeelStrike)
+            .map(|e| e.frame)
+            .collect()
+    };
+    let hs = [strikes(Side::Left), strikes(Side::Right)];
+    let mut strides: Vec<f64> = hs
+        .iter()
+        .flat_map(|f| f.windows(2).map(|w| (w[1] - w[0]) as f64))
+        .collect();
+    let typical = crate::tracks::median(&mut strides);
+    ev.retain(|e| {
+        if e.event != EventKind::ToeOff {
+            return true;
+        }
+        let f = &hs[usize::from(e.side == Side::Right)];
+        let Some(k) = f.iter().rposition(|&h| h <= e.frame) else {
+            return true;
+        };
+        let stride = f.get(k + 1).map_or(typical, |&next| (next - f[k]) as f64);
+        !(stride.is_finite() && ((e.frame - f[k]) as f64) < min_share * stride)
+    });
 }
 
 /// Sorts events by frame, then side, then kind.
@@ -352,6 +415,84 @@ pub fn read_csv(path: &Path) -> Result<Vec<Event>, KinError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testing;
+
+    fn toe_offs(ev: &[Event]) -> Vec<(Side, usize)> {
+        ev.iter()
+            .filter(|e| e.event == EventKind::ToeOff)
+            .map(|e| (e.side, e.frame))
+            .collect()
+    }
+
+    /// A pose model's hip jitter (here the pelvis alternately 8 px ahead and behind, more than
+    /// it walks in a frame) leaves the toe-offs where they were; Zeni's bare extremum moves.
+    #[test]
+    fn toe_offs_do_not_follow_pelvis_jitter() {
+        let clean = testing::walker(30.0, 150, |i| 100.0 + 13.0 * i as f64);
+        let mut noisy = clean.clone();
+        let pelvis = noisy.index("mid_hip").unwrap();
+        for (i, x) in noisy.x[pelvis].iter_mut().enumerate() {
+            *x += if i % 2 == 0 { 8.0 } else { -8.0 };
+        }
+        let dirs = vec![Direction::Right; clean.len()];
+        let detect = |d: &ZeniRefined, t: &Tracks| toe_offs(&d.detect(t, &dirs));
+        let ours = ZeniRefined::default();
+        let before = detect(&ours, &clean);
+        assert!(before.len() >= 6, "{before:?}");
+        assert_eq!(detect(&ours, &noisy), before);
+        let zeni = ZeniRefined {
+            toe_speed_fraction: 0.0,
+            ..ZeniRefined::default()
+        };
+        let (a, b) = (detect(&zeni, &clean), detect(&zeni, &noisy));
+        assert_eq!(a.len(), b.len());
+        assert!(
+            a.iter()
+                .zip(&b)
+                .all(|(x, y)| x.0 == y.0 && x.1.abs_diff(y.1) <= 1)
+        );
+        assert_ne!(a, b, "the jitter moves Zeni's extremum");
+    }
+
+    #[test]
+    fn toe_offs_right_after_their_heel_strike_are_dropped() {
+        let ev = |side, event, frame| Event { side, event, frame };
+        let (l, r, hs, to) = (
+            Side::Left,
+            Side::Right,
+            EventKind::HeelStrike,
+            EventKind::ToeOff,
+        );
+        // Left strides of 36 frames: a toe-off 6 frames after the heel strike is the right
+        // foot's, mislabelled; the one at 60 % stays. Without a next heel strike the typical
+        // stride (median over both feet) decides.
+        let mut e = vec![
+            ev(l, hs, 100),
+            ev(l, to, 106),
+            ev(r, to, 110),
+            ev(r, hs, 118),
+            ev(l, to, 122),
+            ev(l, hs, 136),
+            ev(l, to, 140),
+            ev(r, to, 146),
+            ev(r, hs, 154),
+            ev(l, to, 158),
+        ];
+        drop_implausible_toe_offs(&mut e, 0.3);
+        let left: Vec<usize> = toe_offs(&e)
+            .into_iter()
+            .filter(|x| x.0 == l)
+            .map(|x| x.1)
+            .collect();
+        assert_eq!(left, vec![122, 158]);
+        // The right toe-offs at 110 (no earlier right heel strike) and 146 (28 frames after
+        // its heel strike at 118) stay.
+        assert_eq!(toe_offs(&e).iter().filter(|x| x.0 == r).count(), 2);
+        // No stride known: nothing to judge by.
+        let mut e = vec![ev(l, hs, 10), ev(l, to, 11)];
+        drop_implausible_toe_offs(&mut e, 0.3);
+        assert_eq!(e.len(), 2);
+    }
 
     #[test]
     fn peaks_need_prominence_and_distance() {

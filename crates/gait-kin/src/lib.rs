@@ -1,9 +1,10 @@
 //! Keypoint post-processing, sagittal joint angles, gait events and cycles.
 //!
-//! [`analyse`] runs the whole chain on a [`PoseSequence`]: likelihood gate -> left/right swap
-//! correction -> gap filling -> low-pass filter -> walking direction -> angles -> walking
-//! bouts -> events (kept inside bouts) -> candidate strides -> per-stride quality control ->
-//! cycles and spatiotemporal parameters of the accepted strides. Each step is a trait
+//! [`analyse`] runs the whole chain on a [`PoseSequence`]: likelihood gate -> lower legs dropped
+//! where both legs are drawn on one ([`collapse`]) -> left/right swap correction -> gap filling
+//! -> low-pass filter -> walking direction -> angles -> walking bouts -> events (kept inside
+//! bouts) -> candidate strides -> per-stride quality control -> cycles and spatiotemporal
+//! parameters of the accepted strides. Each step is a trait
 //! ([`SwapCorrector`], [`GapFiller`], [`Smoother`], [`EventDetector`]) so a researcher can
 //! replace it; [`analyse_with`] takes them. [`write_outputs`] writes the CSV files of `gait kin`.
 //!
@@ -17,6 +18,7 @@
 pub mod angles;
 pub mod bouts;
 pub mod butterworth;
+pub mod collapse;
 pub mod config;
 pub mod cycles;
 pub mod direction;
@@ -40,6 +42,7 @@ use serde::Serialize;
 
 pub use angles::Angles;
 pub use bouts::Bout;
+pub use collapse::CollapseRule;
 pub use config::{FilterKind, GapFillKind, KinematicsConfig, PostprocessConfig, Side};
 pub use cycles::{CycleCurve, Stride};
 pub use direction::Direction;
@@ -88,6 +91,9 @@ pub struct KinResult {
     pub n_frames: usize,
     /// Frames whose left/right leg labels were exchanged and corrected.
     pub swapped_frames: usize,
+    /// Frames whose lower-leg keypoints were dropped because both legs were drawn on one
+    /// (see [`collapse`]); gap filling bridges them.
+    pub collapsed_frames: usize,
     /// Per-frame walking direction.
     #[serde(skip)]
     pub direction: Vec<Direction>,
@@ -249,6 +255,7 @@ pub fn analyse_with(
         first_frame: t.first_frame,
         n_frames: n,
         swapped_frames: c.swapped.iter().filter(|&&s| s).count(),
+        collapsed_frames: c.collapsed,
         direction_counts: counts,
         near_side: dirs.near_side(),
         direction: dirs.per_frame,
@@ -306,9 +313,12 @@ struct Cleaned {
     /// The model's likelihoods before the gate, leg labels swap-corrected.
     raw_likelihood: Vec<Vec<f64>>,
     swapped: Vec<bool>,
+    /// Frames whose lower legs were dropped as collapsed.
+    collapsed: usize,
 }
 
-/// Likelihood gate -> swap correction -> gap filling -> smoothing.
+/// Likelihood gate -> collapsed frames dropped -> swap correction -> gap filling -> smoothing
+/// (collapsed frames filled after it).
 fn clean(
     seq: &PoseSequence,
     post: &PostprocessConfig,
@@ -330,6 +340,19 @@ fn clean(
         ));
     }
 
+    // Frames with both legs drawn on one carry no labels and mislead the swap correction; they
+    // are part of the label cleaning and go with it.
+    let collapsed = match steps.swap {
+        Some(_) => collapse::CollapseRule::default().find(&t),
+        None => vec![false; n],
+    };
+    let collapsed_frames = collapsed.iter().filter(|&&c| c).count();
+    if collapsed_frames > 0 {
+        collapse::drop_frames(&mut t, &collapsed);
+        warnings.push(format!(
+            "lower-leg keypoints dropped in {collapsed_frames} frames where both legs were drawn on one"
+        ));
+    }
     let swapped = steps
         .swap
         .map(|s| s.correct(&mut t))
@@ -371,8 +394,21 @@ fn clean(
                 t.likelihood[j][i] = post.likelihood_threshold;
             }
         }
+        // A collapsed frame is filled only after smoothing, from the smoothed frames around it:
+        // filtered with the rest, the filled guess would spread over the well-seen frames
+        // either side. Collapses come with fast movement (motion blur; both inside the sample's
+        // walk are at a foot leaving the ground), and the guess then moves its onset into them.
+        let late: Vec<usize> = (0..n)
+            .filter(|&i| collapsed[i] && gated.x[j][i].is_nan() && t.x[j][i].is_finite())
+            .collect();
         for coord in [&mut t.x[j], &mut t.y[j]] {
+            for &i in &late {
+                coord[i] = f64::NAN;
+            }
             smooth::smooth_segments(steps.smoother, coord, fps);
+            if !late.is_empty() {
+                steps.gap_filler.fill(coord, max_gap);
+            }
         }
     }
     Cleaned {
@@ -380,6 +416,7 @@ fn clean(
         gated,
         raw_likelihood: raw.likelihood,
         swapped,
+        collapsed: collapsed_frames,
     }
 }
 
@@ -465,5 +502,49 @@ mod tests {
             "{:?}",
             r.warnings
         );
+    }
+
+    /// The pose model drawing both legs on one leg right at the right foot's toe-offs (where
+    /// BlazePose did it on the sample): the frames are dropped and filled, no label is
+    /// "corrected", and every event stays within a frame of where it was.
+    #[test]
+    fn collapses_at_toe_off_leave_the_events() {
+        let clean = testing::walker(30.0, 180, |i| 100.0 + 13.0 * i as f64);
+        let (post, kin) = (PostprocessConfig::default(), KinematicsConfig::default());
+        let before = analyse(&clean.to_sequence(), &post, &kin).unwrap();
+        let toe_offs: Vec<usize> = before
+            .events
+            .iter()
+            .filter(|e| e.side == Side::Right && e.event == EventKind::ToeOff)
+            .map(|e| e.frame)
+            .collect();
+        assert!(toe_offs.len() >= 3, "{:?}", before.events);
+        let mut t = clean.clone();
+        for &f in &toe_offs {
+            for p in tracks::LOWER_LEG {
+                let (l, r) = (
+                    t.leg_index(Side::Left, p).unwrap(),
+                    t.leg_index(Side::Right, p).unwrap(),
+                );
+                t.x[r][f] = t.x[l][f] + 6.0;
+                t.y[r][f] = t.y[l][f] - 4.0;
+            }
+        }
+        let after = analyse(&t.to_sequence(), &post, &kin).unwrap();
+        assert_eq!(after.collapsed_frames, toe_offs.len());
+        assert_eq!(after.swapped_frames, 0);
+        assert_eq!(
+            after.events.len(),
+            before.events.len(),
+            "{:?}",
+            after.events
+        );
+        for (a, b) in before.events.iter().zip(&after.events) {
+            assert!(
+                a.side == b.side && a.event == b.event && a.frame.abs_diff(b.frame) <= 1,
+                "{a:?} vs {b:?}"
+            );
+        }
+        assert_eq!(after.cycles_accepted, before.cycles_accepted);
     }
 }

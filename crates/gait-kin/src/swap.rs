@@ -1,7 +1,7 @@
 //! Left/right leg label swaps: detection by whole-leg temporal continuity, and correction.
 
 use crate::config::Side;
-use crate::tracks::{LEG, Tracks, dist};
+use crate::tracks::{LEG, LOWER_LEG, Tracks, dist};
 
 /// Finds the frames whose left/right leg labels are exchanged and exchanges them back.
 /// Returns, per frame of `tracks`, whether it was swapped.
@@ -11,7 +11,8 @@ pub trait SwapCorrector {
 
 /// Two-state (kept / swapped) Viterbi over frames. The cost of a labelling is how far each
 /// relabelled leg keypoint lies from its constant-velocity prediction from the two previous
-/// (relabelled) frames, summed over both legs and all keypoints seen on both legs, plus a price
+/// (relabelled) observed frames, summed over both legs and all keypoints seen on both legs
+/// (see [`ContinuitySwap::detect`] for frames without lower legs in between), plus a price
 /// for every frame whose labels are exchanged: the model's labels are trusted unless continuity
 /// clearly says otherwise. Without that price a single ambiguous frame where the legs cross
 /// lets the labels flip for free, and real 30 fps video (BlazePose on the bundled sample) then
@@ -22,12 +23,19 @@ pub struct ContinuitySwap {
     /// Per second, not per frame: the continuity evidence at the ends of a swapped run does not
     /// grow with the frame rate, so a per-frame price would mean something else at 150 Hz.
     pub swap_price: f64,
+    /// Observed frames further apart than this (seconds) are not linked: after a long gap the
+    /// labels are free. 0.15 s bridges a dropped collapse (`collapse::CollapseRule`, up to
+    /// 0.1 s) with a frame to spare.
+    pub max_link_s: f64,
 }
 
 impl Default for ContinuitySwap {
     fn default() -> Self {
         // 0.2 leg lengths per frame at 30 fps; chosen on the bundled sample (see tests).
-        Self { swap_price: 6.0 }
+        Self {
+            swap_price: 6.0,
+            max_link_s: 0.15,
+        }
     }
 }
 
@@ -39,116 +47,143 @@ fn leg_pairs(t: &Tracks) -> Vec<[usize; 2]> {
 }
 
 impl ContinuitySwap {
-    /// Cost of labelling frame `i` with `s` given labels `s1` at `i-1` and `s2` at `i-2`,
-    /// or `None` when no keypoint links frame `i` to frame `i-1`.
+    /// Cost of labelling observed frame `a` with `s`, given labels `s1` at the previous observed
+    /// frame `b` and `s2` at the one before, `c`; `None` when no keypoint links `a` to `b`.
+    /// Frames need not be adjacent: the constant-velocity prediction is scaled by the frame
+    /// spacing, so a frame dropped in between (a collapse, a gated keypoint) does not cut the
+    /// evidence.
     fn cost(
         t: &Tracks,
         pairs: &[[usize; 2]],
-        i: usize,
-        s: usize,
-        s1: usize,
-        s2: usize,
+        (a, b, c): (usize, usize, Option<usize>),
+        (s, s1, s2): (usize, usize, usize),
     ) -> Option<f64> {
         let mut total = 0.0;
         let mut linked = false;
         for pair in pairs {
             let both = |f: usize| Some((t.at(pair[0], f)?, t.at(pair[1], f)?));
-            let (Some(now), Some(prev)) = (both(i), both(i - 1)) else {
+            let (Some(now), Some(prev)) = (both(a), both(b)) else {
                 continue;
             };
             linked = true;
-            let before = if i >= 2 { both(i - 2) } else { None };
+            let before = c.and_then(|c| Some((c, both(c)?)));
             let pick = |p: ((f64, f64), (f64, f64)), leg: usize, swapped: usize| {
                 if (leg ^ swapped) == 0 { p.0 } else { p.1 }
             };
             for leg in 0..2 {
-                let a = pick(now, leg, s);
-                let b = pick(prev, leg, s1);
+                let x = pick(now, leg, s);
+                let y = pick(prev, leg, s1);
                 let predicted = match before {
-                    Some(bb) => {
-                        let c = pick(bb, leg, s2);
-                        (2.0 * b.0 - c.0, 2.0 * b.1 - c.1)
+                    Some((c, cc)) => {
+                        let z = pick(cc, leg, s2);
+                        let k = (a - b) as f64 / (b - c) as f64;
+                        (y.0 + k * (y.0 - z.0), y.1 + k * (y.1 - z.1))
                     }
-                    None => b,
+                    None => y,
                 };
-                total += dist(a, predicted);
+                total += dist(x, predicted);
             }
         }
         linked.then_some(total)
     }
 
     /// Swap state per frame (true = labels exchanged in the input).
+    ///
+    /// The Viterbi runs over the observed frames: those with a lower-leg keypoint (knee, ankle,
+    /// heel or toe) on both sides. Consecutive observed frames up to `max_link_s` apart are
+    /// linked. A frame in between with some leg keypoints (one side only, or the hips only)
+    /// takes the labels of the observed frame before it (after it at the start).
     pub fn detect(&self, t: &Tracks) -> Vec<bool> {
         let n = t.len();
         let pairs = leg_pairs(t);
         if n == 0 || pairs.is_empty() {
             return vec![false; n];
         }
-        // State (s_prev, s_cur) encoded as 2 * s_prev + s_cur.
         let fps = if t.fps > 0.0 { t.fps } else { 30.0 };
+        let lower: Vec<[usize; 2]> = LOWER_LEG
+            .iter()
+            .filter_map(|p| Some([t.leg_index(Side::Left, p)?, t.leg_index(Side::Right, p)?]))
+            .collect();
+        let obs: Vec<usize> = (0..n)
+            .filter(|&i| {
+                lower
+                    .iter()
+                    .any(|p| t.at(p[0], i).is_some() && t.at(p[1], i).is_some())
+            })
+            .collect();
+        let m = obs.len();
+        let mut swapped = vec![false; n];
+        if m == 0 {
+            return swapped;
+        }
+        let max_link = ((self.max_link_s * fps).round() as usize).max(1);
+        let near = |x: usize, y: usize| x - y <= max_link;
+        // State (s_prev, s_cur) encoded as 2 * s_prev + s_cur.
         let price = self.swap_price * median_leg_length(t).unwrap_or(0.0) / fps;
         let mut score = [0.0, price, 0.0, price];
-        let mut back: Vec<[usize; 4]> = vec![[0; 4]; n];
-        let mut linked = vec![false; n];
-        for i in 1..n {
+        let mut back: Vec<[usize; 4]> = vec![[0; 4]; m];
+        for k in 1..m {
+            let (a, b) = (obs[k], obs[k - 1]);
+            let c = (k >= 2 && near(b, obs[k - 2])).then(|| obs[k - 2]);
             let mut next = [f64::INFINITY; 4];
             for (state, slot) in next.iter_mut().enumerate() {
                 let (s1, s) = (state >> 1, state & 1);
                 for s2 in 0..2 {
                     let from = 2 * s2 + s1;
-                    let c = match Self::cost(t, &pairs, i, s, s1, s2) {
-                        Some(c) => {
-                            linked[i] = true;
-                            c
-                        }
-                        None => 0.0,
+                    let cost = if near(a, b) {
+                        Self::cost(t, &pairs, (a, b, c), (s, s1, s2)).unwrap_or(0.0)
+                    } else {
+                        0.0
                     };
                     // A negligible price per label change breaks exact ties (legs on top of
                     // each other) in favour of fewer changes.
                     let v = score[from]
-                        + c
+                        + cost
                         + if s != s1 { 1e-6 } else { 0.0 }
                         + if s == 1 { price } else { 0.0 };
                     if v < *slot {
                         *slot = v;
-                        back[i][state] = from;
+                        back[k][state] = from;
                     }
                 }
             }
             // Keep scores small; only differences matter.
-            let m = next.iter().copied().fold(f64::INFINITY, f64::min);
-            score = next.map(|v| v - m);
+            let low = next.iter().copied().fold(f64::INFINITY, f64::min);
+            score = next.map(|v| v - low);
         }
         let mut state = (0..4)
             .min_by(|&a, &b| score[a].total_cmp(&score[b]))
             .unwrap_or(0);
-        let mut swapped = vec![false; n];
-        for i in (0..n).rev() {
-            swapped[i] = state & 1 == 1;
-            if i == 0 {
+        let mut on_obs = vec![false; m];
+        for k in (0..m).rev() {
+            on_obs[k] = state & 1 == 1;
+            if k == 0 {
                 break;
             }
-            if i == 1 {
-                swapped[0] = state >> 1 == 1;
+            if k == 1 {
+                on_obs[0] = state >> 1 == 1;
                 break;
             }
-            state = back[i][state];
+            state = back[k][state];
         }
-        // A frame with no leg keypoint on either side cannot be "swapped".
+        // Every frame with a leg keypoint takes the state of the last observed frame up to it;
+        // a frame with no leg keypoint on either side cannot be "swapped".
+        let mut k = 0;
         for (i, s) in swapped.iter_mut().enumerate() {
-            if !pairs
-                .iter()
-                .any(|p| t.at(p[0], i).is_some() || t.at(p[1], i).is_some())
-            {
-                *s = false;
+            while k + 1 < m && obs[k + 1] <= i {
+                k += 1;
             }
+            let any = pairs
+                .iter()
+                .any(|p| t.at(p[0], i).is_some() || t.at(p[1], i).is_some());
+            *s = any && on_obs[k];
         }
         swapped
     }
 }
 
 /// Median hip-to-ankle distance over frames and sides, in pixels.
-fn median_leg_length(t: &Tracks) -> Option<f64> {
+pub(crate) fn median_leg_length(t: &Tracks) -> Option<f64> {
     let mut lengths = Vec::new();
     for side in [Side::Left, Side::Right] {
         let (Some(h), Some(a)) = (t.leg_index(side, "hip"), t.leg_index(side, "ankle")) else {
@@ -231,5 +266,40 @@ mod tests {
         assert_eq!(swapped, expect);
         assert_eq!(t.x, clean.x);
         assert!(ContinuitySwap::default().detect(&clean).iter().all(|s| !s));
+    }
+
+    /// Labels exchanged from just after a frame without lower legs (a dropped collapse) up to
+    /// where the legs next cross (78-79, where any labels fit): only the link across the
+    /// dropped frame shows the exchange. A frame in the run with one leg only (74) takes the
+    /// run's labels.
+    #[test]
+    fn links_across_a_dropped_frame() {
+        let clean = walking(120);
+        let mut t = clean.clone();
+        for i in 71..=78 {
+            swap_frame(&mut t, i);
+        }
+        for j in (1..5).chain(6..10) {
+            t.x[j][70] = f64::NAN;
+            t.y[j][70] = f64::NAN;
+        }
+        for j in 5..10 {
+            t.x[j][74] = f64::NAN;
+            t.y[j][74] = f64::NAN;
+        }
+        let swapped = ContinuitySwap::default().detect(&t);
+        let found: Vec<usize> = (0..120).filter(|&i| swapped[i]).collect();
+        assert!(
+            found.first() == Some(&71) && (77..=79).contains(found.last().unwrap()),
+            "{found:?}"
+        );
+        assert_eq!(found.len(), found.last().unwrap() - 70, "{found:?}");
+        // Without links across gaps, 71-73 (between the two gaps) have no evidence.
+        let unlinked = ContinuitySwap {
+            max_link_s: 0.0,
+            ..Default::default()
+        }
+        .detect(&t);
+        assert!((71..=73).all(|i| !unlinked[i]));
     }
 }

@@ -18,6 +18,9 @@ pub struct Tracks {
 /// The lower-limb segments of one leg, proximal to distal.
 pub const LEG: [&str; 5] = ["hip", "knee", "ankle", "heel", "toe"];
 
+/// The parts of [`LEG`] below the hip.
+pub const LOWER_LEG: [&str; 4] = ["knee", "ankle", "heel", "toe"];
+
 impl Tracks {
     /// Lays the poses out on `frames[0]..=frames[last]`; frames absent from the input are missing.
     pub fn from_sequence(seq: &PoseSequence) -> Self {
