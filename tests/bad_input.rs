@@ -272,3 +272,101 @@ fn cuda_device_without_a_cuda_build() {
     );
     assert_no_results(&out);
 }
+
+/// A folder of `n` images: blank grey, or frames of the sample video.
+fn image_folder(dir: &Path, n: usize, sample: bool) -> std::path::PathBuf {
+    let folder = dir.join("frames");
+    std::fs::create_dir_all(&folder).unwrap();
+    let frames: Vec<image::RgbImage> = if sample {
+        let info = gait_pipeline::input::InputInfo::open(&common::sample_video()).unwrap();
+        let mut reader = info.frames().unwrap();
+        (0..n)
+            .map(|_| reader.next_frame().unwrap().unwrap().image)
+            .collect()
+    } else {
+        vec![image::RgbImage::from_pixel(320, 240, image::Rgb([128, 128, 128])); n]
+    };
+    for (i, f) in frames.iter().enumerate() {
+        f.save(folder.join(format!("{i:03}.png"))).unwrap();
+    }
+    folder
+}
+
+fn run_on(folder: &Path, out: &Path, sets: &[&str]) -> std::process::Command {
+    let mut cmd = gait();
+    cmd.args(["run", "--no-progress", "--models-dir"])
+        .arg(common::models_dir())
+        .arg("--input")
+        .arg(folder)
+        .arg("--out")
+        .arg(out);
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    cmd
+}
+
+#[test]
+fn nobody_in_any_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = image_folder(dir.path(), 3, false);
+    let out = dir.path().join("out");
+    fails_with(
+        &mut run_on(&folder, &out, &[]),
+        &["no person was found in any frame"],
+    );
+    assert_no_results(&out);
+}
+
+#[test]
+fn a_subject_point_outside_the_frame_or_the_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = image_folder(dir.path(), 3, true);
+    let out = dir.path().join("out");
+    fails_with(
+        &mut run_on(
+            &folder,
+            &out,
+            &["pose.person={ frame = 1, x = 5000, y = 10 }"],
+        ),
+        &["pose.person", "(5000, 10)", "outside the 1768x994 frame"],
+    );
+    fails_with(
+        &mut run_on(
+            &folder,
+            &out,
+            &["pose.person={ frame = 40, x = 500, y = 500 }"],
+        ),
+        &["pose.person", "frame 40", "not in the analysed frames 0-2"],
+    );
+    assert_no_results(&out);
+}
+
+#[test]
+fn nobody_walking_still_completes_and_says_so() {
+    // The first 12 frames: only the man on the box is in view, standing.
+    let dir = tempfile::tempdir().unwrap();
+    let folder = image_folder(dir.path(), 12, true);
+    let out = dir.path().join("out");
+    let done = common::run_ok(&mut run_on(&folder, &out, &[]));
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert!(err.contains("no walking bout found"), "{err}");
+    let run = common::read_json(&out.join("run.json"));
+    assert_eq!(
+        run["subject"]["walking"],
+        serde_json::json!(false),
+        "{}",
+        run["subject"]
+    );
+    assert!(
+        run["extra"]["kinematics"]["bouts"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        report.contains("No walking bout found"),
+        "the report says so"
+    );
+}

@@ -6,6 +6,7 @@
 use std::path::PathBuf;
 
 use gait_core::{Backend, Frame, StageContext};
+use gait_pose::PersonRule;
 use gait_pose::blazepose::{BlazeposeConfig, PersonChoice};
 
 fn models_dir() -> PathBuf {
@@ -33,7 +34,7 @@ fn check(backend: Backend) {
             .unwrap();
     let config = BlazeposeConfig {
         backend,
-        person: PersonChoice::MostConfident,
+        person: PersonChoice::Rule(PersonRule::MostConfident),
         tracking: false,
         ..Default::default()
     };

@@ -7,6 +7,7 @@
 use std::path::PathBuf;
 
 use gait_core::{Frame, StageContext};
+use gait_pose::PersonRule;
 use gait_pose::blazepose::{BlazeposeConfig, PersonChoice};
 use image::{RgbImage, imageops};
 
@@ -67,9 +68,9 @@ fn the_configured_person_is_chosen() {
         let x = hip_x(&c, std::slice::from_ref(&frame))[0].expect("somebody found");
         if x < 200.0 { "left" } else { "right" }
     };
-    assert_eq!(side(PersonChoice::Leftmost), "left");
-    assert_eq!(side(PersonChoice::Rightmost), "right");
-    assert_eq!(side(PersonChoice::Largest), "left");
+    assert_eq!(side(PersonChoice::Rule(PersonRule::Leftmost)), "left");
+    assert_eq!(side(PersonChoice::Rule(PersonRule::Rightmost)), "right");
+    assert_eq!(side(PersonChoice::Rule(PersonRule::Largest)), "left");
 }
 
 #[test]
@@ -82,7 +83,7 @@ fn the_chosen_person_is_kept_when_another_becomes_larger() {
     // Video mode (tracking) keeps to the person; static mode treats every
     // frame on its own by design.
     let c = BlazeposeConfig {
-        person: PersonChoice::Largest,
+        person: PersonChoice::Rule(PersonRule::Largest),
         tracking: true,
         detection_threshold: THRESHOLD,
         ..Default::default()
@@ -91,7 +92,7 @@ fn the_chosen_person_is_kept_when_another_becomes_larger() {
     assert!(xs.iter().all(|x| x.is_some_and(|x| x < 200.0)), "{xs:?}");
     // A fresh estimator on the last scene alone picks the now larger right one.
     let c = BlazeposeConfig {
-        person: PersonChoice::Largest,
+        person: PersonChoice::Rule(PersonRule::Largest),
         tracking: false,
         detection_threshold: THRESHOLD,
         ..Default::default()

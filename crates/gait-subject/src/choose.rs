@@ -9,8 +9,9 @@ use crate::TrackSummary;
 /// unless nothing else is there.
 const MIN_SHARE: f32 = 0.1;
 /// A walk shorter than this many body sizes is a shuffle, not a walk across
-/// the view (two steps are about one body size).
-pub const MIN_WALK: f32 = 1.0;
+/// the view. Body sizes are the detector's crops, about 1.5 body heights:
+/// one stride of a normal walk is about half of one.
+pub const MIN_WALK: f32 = 0.5;
 
 /// The index of the chosen track and why, or `None` when `at` names a frame
 /// in which nobody is seen.

@@ -108,6 +108,10 @@ impl SubjectConfig {
             max_gap_frames: (self.max_gap_s * fps).round() as usize,
             max_size_ratio: self.max_size_ratio,
             max_colour_distance: self.max_colour_distance,
+            // A detector misses people for a few frames (motion blur, a
+            // limb across the face); nobody is replaced by someone else
+            // at the same place and size within 0.2 s.
+            short_gap_frames: (0.2 * fps).round() as usize,
         }
     }
 }
@@ -189,7 +193,8 @@ pub fn find(
     frame_size: (u32, u32),
 ) -> Result<Subject, SubjectError> {
     check_point(frames, choice, frame_size)?;
-    let tracks: Vec<TrackSummary> = link::link(frames, &config.limits(fps))
+    let limits = config.limits(fps);
+    let tracks: Vec<TrackSummary> = link::stitch(link::link(frames, &limits), &limits)
         .into_iter()
         .enumerate()
         .map(|(id, t)| TrackSummary::new(id, t, fps))

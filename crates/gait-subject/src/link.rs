@@ -29,18 +29,17 @@ pub struct LinkLimits {
     /// Largest body-size ratio between a track and its next sighting.
     pub max_size_ratio: f32,
     /// Largest colour difference (see [`Appearance::distance`]) to take a
-    /// track up again after a gap of more than a few frames.
+    /// track up again after a gap longer than `short_gap_frames`.
     pub max_colour_distance: f32,
+    /// Gaps up to this many frames are ordinary detector misses: position
+    /// and size decide. Longer ones need the appearance to match too.
+    pub short_gap_frames: usize,
 }
 
 /// Sightings whose body axis leans further than this from upright (radians)
 /// are detector errors for a walking subject (e.g. a box turned upside
 /// down on a half-hidden body): they are not linked into any track.
 const MAX_TILT: f32 = std::f32::consts::FRAC_PI_4;
-
-/// Gaps up to this many frames are ordinary detector misses: position and
-/// size decide. Longer ones need the appearance to match too.
-const SHORT_GAP: usize = 3;
 
 impl Track {
     fn last(&self) -> &Sighting {
@@ -90,13 +89,13 @@ impl Track {
         let d = (p[0] - s.person.centre[0]).hypot(p[1] - s.person.centre[1]) / size;
         // The prediction grows uncertain with the gap; a walker covers about
         // 0.02 body sizes a frame, a runner 0.07.
-        let reach = (0.35 + 0.04 * dt as f32).min(1.0);
+        let reach = (0.2 + 0.04 * dt as f32).min(1.0);
         let ratio = (s.person.size().max(1.0) / size).ln().abs();
         if d > reach || ratio > limits.max_size_ratio.ln() {
             return None;
         }
         let colour = self.appearance().distance(&s.appearance);
-        if dt > SHORT_GAP && colour.is_none_or(|c| c > limits.max_colour_distance) {
+        if dt > limits.short_gap_frames && colour.is_none_or(|c| c > limits.max_colour_distance) {
             return None;
         }
         Some(d / reach + ratio + 4.0 * colour.unwrap_or(0.0))
@@ -149,6 +148,57 @@ fn upright(s: &Sighting) -> bool {
     (tx - cx).abs().atan2(cy - ty) < MAX_TILT
 }
 
+/// Joins tracks that are one person seen twice: the detector sometimes
+/// returns a second box on the same body (another size, half the body), and
+/// the linker then starts a second track that takes over from the first one
+/// (e.g. where the person turns and the first track's prediction misses).
+/// Two tracks are joined when they overlap in time, their boxes coincide
+/// (centres within a third of the body size) in every frame both are seen,
+/// and their colours match.
+pub fn stitch(mut tracks: Vec<Track>, limits: &LinkLimits) -> Vec<Track> {
+    let mut i = 0;
+    while i < tracks.len() {
+        let mut j = i + 1;
+        while j < tracks.len() {
+            if same_person(&tracks[i], &tracks[j], limits) {
+                let other = tracks.remove(j);
+                merge(&mut tracks[i], other);
+                j = i + 1;
+            } else {
+                j += 1;
+            }
+        }
+        i += 1;
+    }
+    tracks
+}
+
+fn same_person(a: &Track, b: &Track, limits: &LinkLimits) -> bool {
+    let mut shared = 0;
+    for s in &a.sightings {
+        let Ok(k) = b.sightings.binary_search_by_key(&s.frame, |x| x.frame) else {
+            continue;
+        };
+        let o = &b.sightings[k];
+        let size = s.person.size().max(o.person.size()).max(1.0);
+        if s.person.distance(&o.person) > size / 3.0 {
+            return false;
+        }
+        shared += 1;
+    }
+    let colours = a.appearance().distance(&b.appearance());
+    shared > 0 && colours.is_some_and(|c| c <= limits.max_colour_distance)
+}
+
+/// `b`'s sightings added to `a`; where both saw the person, `a`'s stay.
+fn merge(a: &mut Track, b: Track) {
+    for s in b.sightings {
+        if let Err(k) = a.sightings.binary_search_by_key(&s.frame, |x| x.frame) {
+            a.sightings.insert(k, s);
+        }
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -157,6 +207,7 @@ pub(crate) mod tests {
         max_gap_frames: 60,
         max_size_ratio: 1.4,
         max_colour_distance: 0.1,
+        short_gap_frames: 6,
     };
 
     pub(crate) fn seen(frame: usize, x: f32, size: f32, grey: f32) -> Sighting {
@@ -214,6 +265,27 @@ pub(crate) mod tests {
                 .skip(1)
                 .all(|t| t.sightings.iter().all(|s| s.appearance.0[0] == 0.7))
         );
+    }
+
+    #[test]
+    fn a_second_box_on_the_same_body_is_stitched_to_its_track() {
+        let first = Track {
+            sightings: (0..20)
+                .map(|f| seen(f, 500.0 - 5.0 * f as f32, 400.0, 0.3))
+                .collect(),
+        };
+        // From frame 15 a bigger box on the same body, which carries on.
+        let second = Track {
+            sightings: (15..40)
+                .map(|f| seen(f, 505.0 - 5.0 * f as f32, 520.0, 0.3))
+                .collect(),
+        };
+        let other = Track {
+            sightings: (15..40).map(|f| seen(f, 900.0, 400.0, 0.3)).collect(),
+        };
+        let tracks = stitch(vec![first, second, other], &LIMITS);
+        assert_eq!(tracks.len(), 2);
+        assert_eq!(tracks[0].sightings.len(), 40);
     }
 
     #[test]

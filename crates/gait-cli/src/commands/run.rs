@@ -39,8 +39,22 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     let report = gait_eval::Report::from_run_dir(&p.out, side)
         .and_then(|r| r.write(&p.out))
         .map_err(|e| CliError(format!("writing the report: {}", one_line(&e.to_string()))))?;
+    let walked = summary.kinematics.as_ref().map_or(String::new(), |k| {
+        let bouts = k.bouts.len();
+        let (yes, no) = (&k.cycles_accepted, &k.cycles_rejected);
+        if bouts == 0 {
+            "; no walking bout found, so no cycles".into()
+        } else {
+            format!(
+                "; {bouts} walking bout(s), cycles accepted left {} right {} (rejected {})",
+                yes.left,
+                yes.right,
+                no.left + no.right
+            )
+        }
+    });
     eprintln!(
-        "{} frames ({} from cache) -> {}",
+        "{} frames ({} from cache){walked} -> {}",
         summary.manifest.frames_processed,
         summary.manifest.frames_from_cache,
         report.display()

@@ -104,7 +104,8 @@ impl Draw for Strip {
     }
 }
 
-/// Up to `opts.max_frames` evenly spaced frames of `seq` side by side with
+/// Up to `opts.max_frames` evenly spaced frames of `seq` (of those with a
+/// pose, when any has one) side by side with
 /// the skeleton drawn over them (left blue, right red). Frames are taken from
 /// `images` by index; where an image is missing the skeleton is drawn on
 /// white. The SVG holds the skeletons only; the PNG has the frames too.
@@ -121,13 +122,22 @@ pub fn skeleton_strip(
     }
     let none = BTreeMap::new();
     let canonical: Vec<Option<String>> = seq.names.iter().map(|n| to_canonical(n, &none)).collect();
-    let n = opts.max_frames.min(seq.len());
+    // Frames with somebody in them: a subject-tracked run leaves the frames
+    // where the subject is out of view empty, and a strip of empty panels
+    // shows nothing. Without any pose, every frame.
+    let mut seen: Vec<usize> = (0..seq.len())
+        .filter(|&i| seq.poses[i].keypoints.iter().any(|k| k.is_found()))
+        .collect();
+    if seen.is_empty() {
+        seen = (0..seq.len()).collect();
+    }
+    let n = opts.max_frames.min(seen.len());
     let rows: Vec<usize> = (0..n)
         .map(|i| {
             if n == 1 {
-                0
+                seen[0]
             } else {
-                i * (seq.len() - 1) / (n - 1)
+                seen[i * (seen.len() - 1) / (n - 1)]
             }
         })
         .collect();
