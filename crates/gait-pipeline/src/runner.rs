@@ -15,7 +15,7 @@ use crate::input::InputInfo;
 use crate::manifest::{InputRecord, RunManifest, StageRecord};
 use crate::passes::{PassOutput, Passes};
 use crate::plan::{self, Models};
-use crate::registry::{self, Stages};
+use crate::registry;
 use crate::selection::{self, SelectionMode, SelectionRecord};
 use crate::subject::{self, Found};
 use crate::{PipelineConfig, PipelineError, atomic, interpolate};
@@ -70,15 +70,8 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let total = range_len(config, &info);
     let bar = |pass: &str| progress_bar(opts.progress, total, pass);
 
-    let (subject, subject_record, mut warnings) = find_subject(
-        config,
-        &info,
-        fps,
-        &mut stages,
-        &models,
-        root.as_deref(),
-        &bar,
-    )?;
+    let (subject, subject_record, mut warnings) =
+        find_subject(config, &info, fps, &ctx, &models, root.as_deref(), &bar)?;
     let (caches, mut records) =
         plan::stage_caches(config, &models, subject.as_ref(), root.as_deref())?;
     records.extend(subject_record);
@@ -172,7 +165,7 @@ fn find_subject(
     config: &PipelineConfig,
     info: &InputInfo,
     fps: f64,
-    stages: &mut Stages,
+    ctx: &StageContext,
     models: &Models,
     root: Option<&Path>,
     bar: &dyn Fn(&str) -> ProgressBar,
@@ -181,17 +174,26 @@ fn find_subject(
     let kind = registry::stage_kinds(config)[2].1.clone();
     let mut record = plan::record(kind, models.devices[2], &key);
     let bar = bar("finding the subject");
+    let pose_ctx = ctx.clone().on(models.devices[2]);
+    let build = || config.pose.build(&pose_ctx).map_err(PipelineError::from);
+    // One model per core on the CPU; a GPU runs one at a time anyway.
+    let workers = match models.devices[2] {
+        gait_core::Device::Cpu => {
+            std::thread::available_parallelism().map_or(1, |n| n.get().min(4))
+        }
+        _ => 1,
+    };
     let found = subject::find(
         config,
         info,
         fps,
-        stages.pose.as_mut(),
+        &build,
+        workers,
         &cache,
         &mut record,
         &bar,
     )?;
     bar.finish_and_clear();
-    stages.pose.reset();
     Ok(match found {
         Found::Subject(s) => {
             let mut warnings = Vec::new();

@@ -2,7 +2,7 @@
 //! estimator's detector, cached per frame), linked into tracks, one chosen
 //! (gait-subject). The pose passes then follow that track only.
 
-use gait_core::PoseEstimator;
+use gait_core::{Frame, PoseEstimator};
 use gait_subject::{Appearance, Sighting, Subject};
 use indicatif::ProgressBar;
 use std::time::Instant;
@@ -19,12 +19,16 @@ pub(crate) enum Found {
     Off(Option<String>),
 }
 
-/// Runs the pass over the configured range of `info` on the original frames.
+/// Runs the pass over the configured range of `info` on the original frames,
+/// with `workers` instances of the pose model (`build` makes one): frames
+/// are independent here, and the models run single-threaded.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn find(
     config: &PipelineConfig,
     info: &InputInfo,
     fps: f64,
-    pose: &mut dyn PoseEstimator,
+    build: &dyn Fn() -> Result<Box<dyn PoseEstimator>, PipelineError>,
+    workers: usize,
     cache: &StageCache,
     record: &mut StageRecord,
     bar: &ProgressBar,
@@ -32,7 +36,11 @@ pub(crate) fn find(
     if !config.subject.enabled {
         return Ok(Found::Off(None));
     }
-    let Some(frames) = sightings(config, info, pose, cache, record, bar)? else {
+    let mut models = Vec::with_capacity(workers.max(1));
+    for _ in 0..workers.max(1) {
+        models.push(build()?);
+    }
+    let Some(frames) = sightings(config, info, &mut models, cache, record, bar)? else {
         return Ok(Found::Off(Some(
             "the pose stage cannot list the people in a frame: no subject tracking, the estimator picks a person frame by frame".into(),
         )));
@@ -50,50 +58,116 @@ pub(crate) fn find(
 }
 
 /// The people of every frame in range, or `None` when the estimator cannot
-/// list them.
+/// list them. Uncached frames are gathered into batches of a few frames per
+/// model and shared out among the models.
 fn sightings(
     config: &PipelineConfig,
     info: &InputInfo,
-    pose: &mut dyn PoseEstimator,
+    models: &mut [Box<dyn PoseEstimator>],
     cache: &StageCache,
     record: &mut StageRecord,
     bar: &ProgressBar,
 ) -> Result<Option<Vec<(usize, Vec<Sighting>)>>, PipelineError> {
     let (first, last) = (config.input.first_frame, config.input.last_frame);
     let mut reader = info.frames()?;
-    let mut out = Vec::new();
-    while let Some(frame) = reader.next_frame()? {
-        if last.is_some_and(|l| frame.index > l) {
-            break;
+    let mut out: Vec<(usize, Option<Vec<Sighting>>)> = Vec::new();
+    let mut pending: Vec<Frame> = Vec::new();
+    let batch = 2 * models.len();
+    let mut done = false;
+    while !done {
+        match reader.next_frame()? {
+            Some(frame) if last.is_none_or(|l| frame.index <= l) => {
+                done = last == Some(frame.index);
+                if frame.index < first {
+                    continue;
+                }
+                bar.inc(1);
+                let seen = cache.load_json::<Vec<Sighting>>(frame.index);
+                record.cached += usize::from(seen.is_some());
+                out.push((frame.index, seen.clone()));
+                if seen.is_none() {
+                    pending.push(frame);
+                }
+            }
+            _ => done = true,
         }
-        if frame.index < first {
-            continue;
+        if pending.len() == batch || (done && !pending.is_empty()) {
+            let t = Instant::now();
+            let Some(found) = people(models, &pending)? else {
+                return Ok(None);
+            };
+            record.seconds += t.elapsed().as_secs_f64();
+            record.computed += pending.len();
+            for (frame, seen) in pending.drain(..).zip(found) {
+                cache.store_json(frame.index, &seen)?;
+                if let Some(slot) = out.iter_mut().rev().find(|(f, _)| *f == frame.index) {
+                    slot.1 = Some(seen);
+                }
+            }
         }
-        bar.inc(1);
-        if let Some(seen) = cache.load_json::<Vec<Sighting>>(frame.index) {
-            record.cached += 1;
-            out.push((frame.index, seen));
-            continue;
+    }
+    Ok(Some(
+        out.into_iter()
+            .map(|(f, seen)| (f, seen.unwrap_or_default()))
+            .collect(),
+    ))
+}
+
+/// The people of each of `frames`, the frames shared out among `models`
+/// (one thread each); `None` when the estimator cannot list people.
+fn people(
+    models: &mut [Box<dyn PoseEstimator>],
+    frames: &[Frame],
+) -> Result<Option<Vec<Vec<Sighting>>>, PipelineError> {
+    let per = frames.len().div_ceil(models.len()).max(1);
+    let results: Vec<Result<Option<Vec<Vec<Sighting>>>, PipelineError>> = std::thread::scope(|s| {
+        let handles: Vec<_> = models
+            .iter_mut()
+            .zip(frames.chunks(per))
+            .map(|(model, chunk)| s.spawn(move || of_frames(model.as_mut(), chunk)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err(PipelineError::Stage(gait_core::StageError::backend(
+                        "pose",
+                        "the pose model failed while finding people",
+                    )))
+                })
+            })
+            .collect()
+    });
+    let mut all = Vec::with_capacity(frames.len());
+    for r in results {
+        match r? {
+            Some(found) => all.extend(found),
+            None => return Ok(None),
         }
-        let t = Instant::now();
-        let Some(people) = pose.people(&frame)? else {
+    }
+    Ok(Some(all))
+}
+
+/// The people in each frame, with their appearance.
+fn of_frames(
+    model: &mut dyn PoseEstimator,
+    frames: &[Frame],
+) -> Result<Option<Vec<Vec<Sighting>>>, PipelineError> {
+    let mut out = Vec::with_capacity(frames.len());
+    for frame in frames {
+        let Some(people) = model.people(frame)? else {
             return Ok(None);
         };
-        let seen: Vec<Sighting> = people
-            .into_iter()
-            .map(|person| Sighting {
-                frame: frame.index,
-                person,
-                appearance: Appearance::of(&frame.image, &person),
-            })
-            .collect();
-        record.seconds += t.elapsed().as_secs_f64();
-        record.computed += 1;
-        cache.store_json(frame.index, &seen)?;
-        out.push((frame.index, seen));
-        if last == Some(frame.index) {
-            break;
-        }
+        out.push(
+            people
+                .into_iter()
+                .map(|person| Sighting {
+                    frame: frame.index,
+                    person,
+                    appearance: Appearance::of(&frame.image, &person),
+                })
+                .collect(),
+        );
     }
     Ok(Some(out))
 }

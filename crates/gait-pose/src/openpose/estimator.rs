@@ -1,9 +1,6 @@
 //! The OpenPose estimator: network + decoding per frame, then the choice of
 //! the person to follow (see [`crate::person`]).
 
-use std::collections::HashMap;
-use std::hash::{DefaultHasher, Hash, Hasher};
-
 use gait_core::{Frame, PersonBox, Pose, PoseEstimator, StageContext, StageError};
 
 use super::config::OpenposeConfig;
@@ -17,10 +14,6 @@ pub struct Openpose {
     config: OpenposeConfig,
     /// Centre of the person followed in the previous frame (pixels).
     last_centre: Option<(f32, f32)>,
-    /// The people the subject pass found, by frame, with a hash of the image
-    /// they were found in: the pose pass on the same (not regenerated) frame
-    /// reuses them instead of running the network twice.
-    found: HashMap<usize, (u64, Vec<Person>)>,
 }
 
 impl Openpose {
@@ -31,18 +24,11 @@ impl Openpose {
             net: net::load_on(&path, config.model, config.backend, ctx.device)?,
             config: config.clone(),
             last_centre: None,
-            found: HashMap::new(),
         })
     }
 
     /// Everybody the network finds in `frame`.
     fn everyone(&mut self, frame: &Frame) -> Result<Vec<Person>, StageError> {
-        let hash = image_hash(frame);
-        if let Some((h, people)) = self.found.remove(&frame.index)
-            && h == hash
-        {
-            return Ok(people);
-        }
         let net = &mut self.net;
         let found = decode::detect(
             frame,
@@ -61,7 +47,6 @@ impl Openpose {
     ) -> Result<Pose, StageError> {
         let model = self.config.model;
         let Some(s) = subject else {
-            self.found.remove(&frame.index);
             return Ok(Pose {
                 keypoints: names::to_keypoints(model, &[]),
             });
@@ -108,12 +93,6 @@ impl Openpose {
     }
 }
 
-fn image_hash(frame: &Frame) -> u64 {
-    let mut h = DefaultHasher::new();
-    frame.image.as_raw().hash(&mut h);
-    h.finish()
-}
-
 /// A person's box centre and size from its keypoints.
 fn candidate(p: &Person) -> Candidate {
     let pts: Vec<[f32; 3]> = p.keypoints.iter().flatten().copied().collect();
@@ -152,7 +131,6 @@ impl PoseEstimator for Openpose {
                 PersonBox::upright(c.cx, c.cy, 1.25 * c.size, p.score / p.parts.max(1) as f32)
             })
             .collect();
-        self.found.insert(frame.index, (image_hash(frame), people));
         Ok(Some(boxes))
     }
 
