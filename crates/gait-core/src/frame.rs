@@ -21,3 +21,16 @@ impl Frame {
         self.image.height()
     }
 }
+
+/// Sorted frame indices as inclusive `[first, last]` ranges (how run.json
+/// lists frames).
+pub fn ranges(frames: impl IntoIterator<Item = usize>) -> Vec<[usize; 2]> {
+    let mut out: Vec<[usize; 2]> = Vec::new();
+    for f in frames {
+        match out.last_mut() {
+            Some(r) if r[1] + 1 == f => r[1] = f,
+            _ => out.push([f, f]),
+        }
+    }
+    out
+}

@@ -24,7 +24,7 @@ pub use context::StageContext;
 pub use device::{Device, NoCudaSupport};
 pub use edge::EdgeMap;
 pub use error::StageError;
-pub use frame::Frame;
+pub use frame::{Frame, ranges};
 pub use geometry::Resize;
 pub use keypoint::{CANONICAL, Keypoint};
 pub use person::{PersonAt, PersonBox, PersonChoice, PersonRule};

@@ -321,7 +321,7 @@ impl Driver<'_> {
 
 /// A pass's result: every frame index of the range, the poses of the frames
 /// it processed, and those of them that came from the cache.
-type PassResult = (Vec<usize>, Vec<(usize, Pose)>, BTreeSet<usize>);
+pub(crate) type PassResult = (Vec<usize>, Vec<(usize, Pose)>, BTreeSet<usize>);
 
 impl Driver<'_> {
     /// Decodes the configured range and hands the frames `pick(index,

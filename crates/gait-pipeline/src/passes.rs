@@ -8,7 +8,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use gait_core::{PersonBox, Pose};
 use indicatif::ProgressBar;
 
-use crate::driver::{Caches, Driver, Order};
+use crate::driver::{Caches, Driver, Order, PassResult};
 use crate::input::InputInfo;
 use crate::manifest::StageRecord;
 use crate::plan::{ORIGINAL_POSE, StageCaches};
@@ -80,7 +80,7 @@ impl Passes<'_> {
         order: Order,
         original_poses: Option<BTreeMap<usize, Pose>>,
         wanted: &dyn Fn(usize) -> bool,
-    ) -> Result<(Vec<usize>, Vec<(usize, Pose)>, BTreeSet<usize>), PipelineError> {
+    ) -> Result<PassResult, PipelineError> {
         let label = match (regenerate, self.config.selection.mode) {
             (false, _) => "original frames",
             (true, SelectionMode::Poor) => "regenerating poor frames",

@@ -268,17 +268,7 @@ fn median(values: &mut Vec<f64>) -> Option<f64> {
     })
 }
 
-/// Sorted frame indices as inclusive `[first, last]` ranges.
-pub fn ranges(frames: impl IntoIterator<Item = usize>) -> Vec<[usize; 2]> {
-    let mut out: Vec<[usize; 2]> = Vec::new();
-    for f in frames {
-        match out.last_mut() {
-            Some(r) if r[1] + 1 == f => r[1] = f,
-            _ => out.push([f, f]),
-        }
-    }
-    out
-}
+pub use gait_core::ranges;
 
 /// What `run.json` records under `selection`: which frames went which way.
 /// Frame lists are inclusive `[first, last]` ranges.

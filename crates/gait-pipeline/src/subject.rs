@@ -57,6 +57,9 @@ pub(crate) fn find(
     .map_err(|e| PipelineError::input(&info.path, e))
 }
 
+/// Frame index and the people seen in it, in frame order.
+type FramePeople = Vec<(usize, Vec<Sighting>)>;
+
 /// The people of every frame in range, or `None` when the estimator cannot
 /// list them. Uncached frames are gathered into batches of a few frames per
 /// model and shared out among the models.
@@ -67,7 +70,7 @@ fn sightings(
     cache: &StageCache,
     record: &mut StageRecord,
     bar: &ProgressBar,
-) -> Result<Option<Vec<(usize, Vec<Sighting>)>>, PipelineError> {
+) -> Result<Option<FramePeople>, PipelineError> {
     let (first, last) = (config.input.first_frame, config.input.last_frame);
     let mut reader = info.frames()?;
     let mut out: Vec<(usize, Option<Vec<Sighting>>)> = Vec::new();

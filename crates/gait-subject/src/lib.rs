@@ -11,7 +11,7 @@ pub mod walking;
 
 use std::collections::BTreeMap;
 
-use gait_core::{PersonBox, PersonChoice};
+use gait_core::{PersonBox, PersonChoice, ranges};
 use serde::{Deserialize, Serialize};
 
 pub use appearance::Appearance;
@@ -301,18 +301,6 @@ fn bridged(
     }
     if let Some(s) = sightings.last() {
         out.insert(s.frame, s.person);
-    }
-    out
-}
-
-/// Sorted frame numbers as inclusive ranges.
-pub fn ranges(frames: impl IntoIterator<Item = usize>) -> Vec<[usize; 2]> {
-    let mut out: Vec<[usize; 2]> = Vec::new();
-    for f in frames {
-        match out.last_mut() {
-            Some(r) if r[1] + 1 == f => r[1] = f,
-            _ => out.push([f, f]),
-        }
     }
     out
 }

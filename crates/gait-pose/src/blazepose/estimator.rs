@@ -135,22 +135,12 @@ impl Blazepose {
             return Ok(empty);
         }
         let tracked = self.track.take().filter(|_| self.config.tracking);
-        let mut result = None;
-        if let Some(roi) = tracked {
-            let r = self.landmarks(frame, &roi)?;
-            if r.presence >= self.config.presence_threshold {
-                result = Some(r);
-            }
-        }
+        let mut result = self.present(frame, tracked)?;
         if result.is_none() {
             let dets = self.detect(frame)?;
             let last = self.last_centre.filter(|_| self.config.tracking);
-            if let Some(roi) = person::choose(&dets, self.config.person, last, w, h) {
-                let r = self.landmarks(frame, &roi)?;
-                if r.presence >= self.config.presence_threshold {
-                    result = Some(r);
-                }
-            }
+            let roi = person::choose(&dets, self.config.person, last, w, h);
+            result = self.present(frame, roi)?;
         }
         Ok(self.accept(result, w, h))
     }
@@ -171,13 +161,7 @@ impl Blazepose {
             .track
             .take()
             .filter(|roi| self.config.tracking && on_subject(roi, s, w, h));
-        let mut result = None;
-        if let Some(roi) = tracked {
-            let r = self.landmarks(frame, &roi)?;
-            if r.presence >= self.config.presence_threshold {
-                result = Some(r);
-            }
-        }
+        let mut result = self.present(frame, tracked)?;
         if result.is_none() {
             let (wf, hf) = (w as f32, h as f32);
             let roi = Roi::from_alignment(
@@ -186,12 +170,23 @@ impl Blazepose {
                 w,
                 h,
             );
-            let r = self.landmarks(frame, &roi)?;
-            if r.presence >= self.config.presence_threshold {
-                result = Some(r);
-            }
+            result = self.present(frame, Some(roi))?;
         }
         Ok(self.accept(result, w, h))
+    }
+
+    /// The landmarks in the crop `roi`, if there is one and the model finds
+    /// a person there (presence at or above the threshold).
+    fn present(
+        &mut self,
+        frame: &Frame,
+        roi: Option<Roi>,
+    ) -> Result<Option<LandmarkResult>, StageError> {
+        let Some(roi) = roi else {
+            return Ok(None);
+        };
+        let r = self.landmarks(frame, &roi)?;
+        Ok((r.presence >= self.config.presence_threshold).then_some(r))
     }
 
     /// The pose from an accepted landmark result (or none), and the crop to
