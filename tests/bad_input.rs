@@ -370,3 +370,21 @@ fn nobody_walking_still_completes_and_says_so() {
         "the report says so"
     );
 }
+
+#[test]
+fn a_range_past_the_end_of_the_video() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    fails_with(
+        gait()
+            .args(["run", "--no-progress", "--models-dir"])
+            .arg(common::models_dir())
+            .arg("--input")
+            .arg(common::sample_video())
+            .arg("--out")
+            .arg(&out)
+            .args(["--set", "input.first_frame=5000"]),
+        &["no frames in the selected range", "first_frame = 5000"],
+    );
+    assert_no_results(&out);
+}

@@ -45,6 +45,15 @@ pub(crate) fn find(
             "the pose stage cannot list the people in a frame: no subject tracking, the estimator picks a person frame by frame".into(),
         )));
     };
+    if frames.is_empty() {
+        return Err(PipelineError::input(
+            &info.path,
+            format!(
+                "no frames in the selected range (first_frame = {})",
+                config.input.first_frame
+            ),
+        ));
+    }
     let person = config.pose.person();
     gait_subject::find(
         &frames,
