@@ -293,13 +293,7 @@ fn image_folder(dir: &Path, n: usize, sample: bool) -> std::path::PathBuf {
 }
 
 fn run_on(folder: &Path, out: &Path, sets: &[&str]) -> std::process::Command {
-    let mut cmd = gait();
-    cmd.args(["run", "--no-progress", "--models-dir"])
-        .arg(common::models_dir())
-        .arg("--input")
-        .arg(folder)
-        .arg("--out")
-        .arg(out);
+    let mut cmd = common::run_on(folder, out);
     for s in sets {
         cmd.args(["--set", s]);
     }
@@ -376,14 +370,7 @@ fn a_range_past_the_end_of_the_video() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     fails_with(
-        gait()
-            .args(["run", "--no-progress", "--models-dir"])
-            .arg(common::models_dir())
-            .arg("--input")
-            .arg(common::sample_video())
-            .arg("--out")
-            .arg(&out)
-            .args(["--set", "input.first_frame=5000"]),
+        &mut run_on(&common::sample_video(), &out, &["input.first_frame=5000"]),
         &["no frames in the selected range", "first_frame = 5000"],
     );
     assert_no_results(&out);

@@ -10,7 +10,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use common::{gait, models_dir, read_json, run_ok, sample_video};
+use common::{read_json, run_ok, run_on, sample_video};
 use image::{RgbImage, imageops};
 
 /// The sample's frames at half size (884x497), decoded once.
@@ -84,16 +84,7 @@ fn run_scene(name: &str, scene: &[RgbImage], root: &Path) -> (PathBuf, serde_jso
         img.save(dir.join(format!("{i:04}.png"))).unwrap();
     }
     let out = root.join(format!("{name}-run"));
-    run_ok(
-        gait()
-            .args(["run", "--no-progress", "--models-dir"])
-            .arg(models_dir())
-            .arg("--input")
-            .arg(&dir)
-            .arg("--out")
-            .arg(&out)
-            .args(["--set", "input.fps=30"]),
-    );
+    run_ok(run_on(&dir, &out).args(["--set", "input.fps=30"]));
     let run = read_json(&out.join("run.json"));
     (out, run)
 }

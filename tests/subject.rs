@@ -7,7 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{gait, models_dir, read_json, run_ok, sample_video};
+use common::{read_json, run_ok, run_on, sample_video};
 
 /// Rows of a CSV file as maps from the header's names to the cells.
 fn csv_rows(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
@@ -47,15 +47,7 @@ fn events(path: &Path) -> Vec<(String, String, i64)> {
 fn whole_sample_video_follows_the_walker_only_while_she_walks() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    run_ok(
-        gait()
-            .args(["run", "--no-progress", "--models-dir"])
-            .arg(models_dir())
-            .arg("--input")
-            .arg(sample_video())
-            .arg("--out")
-            .arg(&out),
-    );
+    run_ok(&mut run_on(&sample_video(), &out));
     let run = read_json(&out.join("run.json"));
 
     // The subject is the woman: a track that starts after the man's (he is

@@ -23,22 +23,29 @@ pub fn gait() -> Command {
     Command::new(env!("CARGO_BIN_EXE_gait"))
 }
 
-/// `gait run` on frames `first..=last` of the sample video with the test
-/// models, writing to `out`.
-pub fn sample_run(out: &Path, first: usize, last: usize) -> Command {
+/// `gait run` on `input` with the test models and the default pipeline,
+/// writing to `out`.
+pub fn run_on(input: &Path, out: &Path) -> Command {
     let mut cmd = gait();
     cmd.args(["run", "--no-progress", "--models-dir"])
         .arg(models_dir())
         .arg("--input")
-        .arg(sample_video())
+        .arg(input)
         .arg("--out")
-        .arg(out)
-        .args([
-            "--set",
-            &format!("input.first_frame={first}"),
-            "--set",
-            &format!("input.last_frame={last}"),
-        ]);
+        .arg(out);
+    cmd
+}
+
+/// `gait run` on frames `first..=last` of the sample video with the test
+/// models, writing to `out`.
+pub fn sample_run(out: &Path, first: usize, last: usize) -> Command {
+    let mut cmd = run_on(&sample_video(), out);
+    cmd.args([
+        "--set",
+        &format!("input.first_frame={first}"),
+        "--set",
+        &format!("input.last_frame={last}"),
+    ]);
     cmd
 }
 
