@@ -39,6 +39,8 @@ enum Command {
     Models(commands::models::Args),
     /// Run every combination of stage choices over videos and compare them.
     Ablate(commands::ablate::Args),
+    /// Write an earlier run's results as c3d, OpenSim (.trc/.mot) or OpenPose JSON.
+    Export(commands::export::Args),
 }
 
 fn main() -> ExitCode {
@@ -51,6 +53,7 @@ fn main() -> ExitCode {
         Command::Ablate(args) => commands::ablate::execute(args, &models_dir),
         Command::Eval(args) => commands::eval::execute(args, &models_dir),
         Command::Models(args) => commands::models::execute(args, &models_dir),
+        Command::Export(args) => commands::export::execute(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

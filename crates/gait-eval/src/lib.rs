@@ -4,6 +4,8 @@
 
 mod align;
 pub mod angles;
+mod clinical;
+mod cycle_traces;
 mod error;
 mod evaluation;
 pub mod export;
@@ -14,27 +16,37 @@ mod input;
 pub mod keypoint_error;
 pub mod kin;
 pub mod names;
+pub mod normative;
+mod normative_data;
 pub mod openpose;
 mod options;
+pub mod pdf;
 pub mod plot;
 pub mod report;
+pub mod report_config;
+mod run_dir;
+pub mod scores;
+pub mod spatiotemporal;
 mod stats;
 mod subject_lines;
 mod table;
 
 pub use align::{Aligned, align, canonicalize};
 pub use angles::{ANGLE_COLUMNS, AngleTable, read_angles_csv};
+pub use cycle_traces::{CycleTrace, read_cycles_all_csv};
 pub use error::EvalError;
 pub use evaluation::{Evaluation, evaluate_with_angles};
 pub use export::{TrcOptions, write_mot, write_trc};
 pub use input::read_poses;
 pub use kin::evaluate;
 pub use names::Side;
+pub use normative::Normative;
 pub use options::{EvalOptions, Role};
 pub use plot::{
-    CycleCurve, FailureEntry, Figure, StripOptions, comparison_plot, failure_bars, kinematics_plot,
-    read_cycles_csv, skeleton_strip,
+    CycleCurve, FailureEntry, Figure, GraphContext, StripOptions, comparison_plot,
+    consistency_plot, failure_bars, gait_graphs, map_bars, read_cycles_csv, skeleton_strip,
 };
 pub use report::{Report, Table};
+pub use scores::Scores;
 pub use stats::Stat;
 pub use table::{metrics_csv, table_markdown, write_eval};

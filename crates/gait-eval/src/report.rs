@@ -5,10 +5,12 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
+use crate::cycle_traces::CycleTrace;
 use crate::html::{base64, escape, table};
-use crate::plot::{
-    CycleCurve, FailureEntry, Figure, comparison_plot, failure_bars, kinematics_plot,
-};
+use crate::normative::Normative;
+use crate::plot::{CycleCurve, FailureEntry, Figure, comparison_plot, failure_bars};
+use crate::scores::Scores;
+use crate::spatiotemporal::StParam;
 use crate::table::table_markdown;
 use crate::{EvalError, Evaluation, Side};
 
@@ -31,6 +33,18 @@ pub struct Report {
     pub subject: Vec<String>,
     /// This run's joint angles over the gait cycle (gait-kin's cycles).
     pub cycles: Vec<CycleCurve>,
+    /// Every accepted cycle, for the all-cycles plot (`cycles_all.csv`).
+    pub traces: Vec<CycleTrace>,
+    /// Mean toe-off of each side (left, right) in % of the cycle.
+    pub toe_off: [Option<f64>; 2],
+    /// The normative band and reference of the scores.
+    pub normative: Option<Normative>,
+    /// GVS / sagittal GPS against `normative`.
+    pub scores: Option<Scores>,
+    /// `spatiotemporal.csv`, shown with norms and symmetry.
+    pub spatiotemporal: Vec<StParam>,
+    /// Files of the run folder linked from the report (overlay video, exports).
+    pub exports: Vec<String>,
     /// Ground-truth cycles and other methods' cycles, for the comparison figure.
     pub truth_cycles: Vec<CycleCurve>,
     pub method_cycles: Vec<(String, Vec<CycleCurve>)>,
@@ -55,6 +69,12 @@ impl Default for Report {
             prosthetic_side: None,
             subject: vec![],
             cycles: vec![],
+            traces: vec![],
+            toe_off: [None, None],
+            normative: None,
+            scores: None,
+            spatiotemporal: vec![],
+            exports: vec![],
             truth_cycles: vec![],
             method_cycles: vec![],
             evaluations: vec![],
@@ -71,9 +91,12 @@ const STYLE: &str = "body{font-family:'DejaVu Sans',Arial,sans-serif;margin:24px
 h1{font-size:24px}h2{font-size:19px;margin-top:28px;border-bottom:1px solid #ccc}\
 figure{margin:12px 0}figure svg,figure img{max-width:100%;height:auto;border:1px solid #ddd}\
 table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:left;font-size:13px}\
-th{background:#f0f0f0}.warnings li{color:#8a4b00}pre{background:#f6f6f6;padding:8px;overflow:auto;font-size:12px}";
+th{background:#f0f0f0}.warnings li{color:#8a4b00}pre{background:#f6f6f6;padding:8px;overflow:auto;font-size:12px;white-space:pre-wrap;word-break:break-all}\
+video{max-width:100%;border:1px solid #ddd}.no-cycles{color:#8a4b00;font-weight:bold}\
+@page{size:A4;margin:12mm}@media print{body{margin:0;max-width:none}figure,table{break-inside:avoid}video{display:none}h2{break-after:avoid}}";
 
-fn figure(fig: &Figure, caption: &str) -> String {
+/// A figure's SVG inlined with its caption.
+pub(crate) fn figure(fig: &Figure, caption: &str) -> String {
     // plotters' SVG is self-contained markup; drop any XML prolog before inlining.
     let svg = fig
         .svg
@@ -137,18 +160,10 @@ impl Report {
             }
             body.push_str("</ul>");
         }
-        if !self.cycles.is_empty() {
-            body.push_str("<h2>Kinematics over the gait cycle</h2>");
-            let fig = kinematics_plot(&self.cycles, self.prosthetic_side)?;
-            let colours = match self.prosthetic_side {
-                Some(_) => "prosthetic red, intact blue",
-                None => "left blue, right red",
-            };
-            body.push_str(&figure(
-                &fig,
-                &format!("Mean (line) and SD (band) over the accepted cycles; {colours}."),
-            ));
-        }
+        body.push_str(&self.gait_sections()?);
+        body.push_str(&self.score_section()?);
+        body.push_str(&self.spatiotemporal_section());
+        body.push_str(&self.video_section());
         if !self.truth_cycles.is_empty() && !self.method_cycles.is_empty() {
             body.push_str("<h2>Methods against ground truth</h2>");
             let fig = comparison_plot(
@@ -209,13 +224,20 @@ impl Report {
         if let Some(strip) = &self.strip {
             body.push_str("<h2>Skeleton overlay</h2>");
             body.push_str(&format!(
-                "<figure id=\"fig-skeleton\" class=\"plot\"><img alt=\"skeleton overlay frames\" src=\"data:image/png;base64,{}\"><figcaption>Detected keypoints; left leg blue, right leg red.</figcaption></figure>",
+                "<figure id=\"fig-skeleton\" class=\"plot\"><img alt=\"skeleton overlay frames\" src=\"data:image/png;base64,{}\"><figcaption>Detected keypoints; left leg red, right leg blue.</figcaption></figure>",
                 base64(&strip.png)
             ));
         }
         for t in &self.tables {
             body.push_str(&format!("<h2>{}</h2>", escape(&t.title)));
             body.push_str(&table(&t.header, &t.rows));
+        }
+        if !self.exports.is_empty() {
+            body.push_str("<h2 id=\"files\">Files of this run</h2><ul>");
+            for f in &self.exports {
+                body.push_str(&format!("<li><a href=\"{0}\">{0}</a></li>", escape(f)));
+            }
+            body.push_str("</ul>");
         }
         if let Some(m) = &self.manifest {
             body.push_str("<h2>Run manifest (run.json)</h2>");
@@ -229,6 +251,17 @@ impl Report {
         ))
     }
 
+    /// The overlay video, played from the run folder (a print shows its name).
+    fn video_section(&self) -> String {
+        if !self.exports.iter().any(|f| f == "overlay.mp4") {
+            return String::new();
+        }
+        "<h2 id=\"overlay\">Overlay video</h2><video controls preload=\"metadata\" src=\"overlay.mp4\" width=\"960\"></video>\
+         <p>overlay.mp4: the skeleton on every analysed frame (left red, right blue), heel strikes and toe-offs as they happen; \
+         frames outside walking bouts or in rejected cycles dimmed.</p>"
+            .into()
+    }
+
     /// Writes `report.html` into `out_dir`; returns its path.
     pub fn write(&self, out_dir: &Path) -> Result<PathBuf, EvalError> {
         crate::fsutil::ensure_dir(out_dir)?;
@@ -236,114 +269,6 @@ impl Report {
         crate::fsutil::write_atomic(&path, self.html()?.as_bytes())?;
         Ok(path)
     }
-
-    /// A report of a `gait run` / `gait kin` output folder: `run.json` (its
-    /// `warnings` arrays, anywhere, are listed), `cycles.csv`,
-    /// `spatiotemporal.csv` and `events.csv` when present, and a skeleton strip
-    /// from `keypoints.csv`. Files that are absent are left out.
-    pub fn from_run_dir(dir: &Path, prosthetic_side: Option<Side>) -> Result<Report, EvalError> {
-        let mut r = Report {
-            prosthetic_side,
-            title: format!("Gait analysis report: {}", dir.display()),
-            ..Default::default()
-        };
-        let run = dir.join("run.json");
-        if run.exists() {
-            let text = std::fs::read_to_string(&run)
-                .map_err(|e| EvalError::io(format!("reading {}", run.display()), e))?;
-            let v: Value = serde_json::from_str(&text).map_err(|e| EvalError::input(&run, e))?;
-            collect_warnings(&v, &mut r.warnings);
-            r.subject = crate::subject_lines::describe(&v);
-            r.manifest = Some(v);
-        }
-        let cycles = dir.join("cycles.csv");
-        if cycles.exists() {
-            r.cycles = crate::plot::read_cycles_csv(&cycles)?;
-        }
-        for (file, title) in [
-            (
-                "spatiotemporal.csv",
-                "Spatiotemporal parameters (accepted cycles)",
-            ),
-            (
-                "cycle_quality.csv",
-                "Cycle quality: every cycle found, kept or rejected",
-            ),
-            ("bouts.csv", "Walking bouts"),
-            ("events.csv", "Gait events"),
-        ] {
-            let p = dir.join(file);
-            if p.exists() {
-                r.tables.push(read_table(&p, title)?);
-            }
-        }
-        let kp = dir.join("keypoints.csv");
-        if kp.exists() {
-            let fps = r
-                .manifest
-                .as_ref()
-                .and_then(|m| m.get("fps"))
-                .and_then(Value::as_f64)
-                .unwrap_or(30.0);
-            let seq = crate::read_poses(&kp, fps, None)?;
-            if !seq.is_empty() {
-                r.strip = Some(crate::plot::skeleton_strip(
-                    &seq,
-                    &[],
-                    &crate::plot::StripOptions::default(),
-                )?);
-            }
-        }
-        Ok(r)
-    }
-}
-
-/// Every string in arrays under a key named `warnings`, at any depth.
-fn collect_warnings(v: &Value, out: &mut Vec<String>) {
-    match v {
-        Value::Object(m) => {
-            for (k, x) in m {
-                if k == "warnings"
-                    && let Value::Array(items) = x
-                {
-                    // run.json repeats a step's warnings in its summary; list each once.
-                    for w in items.iter().filter_map(Value::as_str) {
-                        if !out.iter().any(|o| o == w) {
-                            out.push(w.to_string());
-                        }
-                    }
-                } else {
-                    collect_warnings(x, out);
-                }
-            }
-        }
-        Value::Array(items) => items.iter().for_each(|x| collect_warnings(x, out)),
-        _ => {}
-    }
-}
-
-fn read_table(path: &Path, title: &str) -> Result<Table, EvalError> {
-    let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
-    let header = r
-        .headers()
-        .map_err(|e| EvalError::input(path, e))?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    let mut rows = Vec::new();
-    for rec in r.records() {
-        rows.push(
-            rec.map_err(|e| EvalError::input(path, e))?
-                .iter()
-                .map(str::to_string)
-                .collect(),
-        );
-    }
-    Ok(Table {
-        title: title.into(),
-        header,
-        rows,
-    })
 }
 
 #[cfg(test)]
@@ -363,7 +288,7 @@ mod tests {
             "parameter,side,value,unit\ncadence,,104.2,steps/min\n",
         )
         .unwrap();
-        let html = Report::from_run_dir(dir.path(), Some(Side::Left))
+        let html = Report::from_run_dir(dir.path(), Some(Side::Left), None)
             .unwrap()
             .html()
             .unwrap();
@@ -379,7 +304,7 @@ mod tests {
         assert!(!html.contains("<script"), "no script in the report");
         let empty = tempfile::tempdir().unwrap();
         assert!(
-            Report::from_run_dir(empty.path(), None)
+            Report::from_run_dir(empty.path(), None, None)
                 .unwrap()
                 .html()
                 .unwrap()

@@ -3,8 +3,8 @@
 use gait_core::{Frame, Keypoint, Pose, PoseSequence};
 use gait_eval::failure::{Count, Failures};
 use gait_eval::{
-    CycleCurve, FailureEntry, Figure, Side, StripOptions, comparison_plot, failure_bars,
-    kinematics_plot, skeleton_strip,
+    CycleCurve, FailureEntry, Figure, GraphContext, Side, StripOptions, comparison_plot,
+    failure_bars, gait_graphs, skeleton_strip,
 };
 
 pub fn curves(offset: f64) -> Vec<CycleCurve> {
@@ -49,18 +49,27 @@ fn dark_pixels(fig: &Figure) -> usize {
 
 #[test]
 fn kinematics_and_comparison_plots() {
-    let k = kinematics_plot(&curves(0.0), Some(Side::Right)).unwrap();
+    let ctx = GraphContext {
+        prosthetic: Some(Side::Right),
+        normative: None,
+        toe_off: [Some(60.0), Some(62.0)],
+    };
+    let k = gait_graphs(&curves(0.0), ctx).unwrap();
     assert!(
         count_colour(&k, [214, 39, 40]) > 500,
-        "prosthetic line visible"
+        "left (red) line visible"
     );
     assert!(
         count_colour(&k, [31, 119, 180]) > 500,
-        "intact line visible"
+        "right (blue) line visible"
+    );
+    assert!(
+        k.svg.contains("right (prosthetic), n="),
+        "legend names the roles"
     );
     assert!(dark_pixels(&k) > 500, "axis text is rendered");
     assert!(
-        k.svg.contains("Knee angle") && k.svg.contains("<polyline"),
+        k.svg.contains("Knee flexion") && k.svg.contains("<polyline"),
         "SVG has text and lines"
     );
     let c = comparison_plot(

@@ -79,6 +79,32 @@ pub fn resample(series: &[f64], first_frame: usize, s: &Stride) -> Option<Vec<f6
         .collect()
 }
 
+/// One joint's curve over one stride (101 points), for the all-cycles plot and export.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StrideCurve {
+    pub stride: Stride,
+    pub joint: &'static str,
+    pub values: Vec<f64>,
+}
+
+/// Every joint's curve over every given stride that has all its samples.
+pub fn each(angles: &Angles, first_frame: usize, strides: &[Stride]) -> Vec<StrideCurve> {
+    let mut out = Vec::new();
+    for s in strides {
+        let leg = angles.leg(s.side);
+        for (joint, series) in JOINTS.iter().zip([&leg.hip, &leg.knee, &leg.ankle]) {
+            if let Some(values) = resample(series, first_frame, s) {
+                out.push(StrideCurve {
+                    stride: *s,
+                    joint,
+                    values,
+                });
+            }
+        }
+    }
+    out
+}
+
 /// Mean and sample SD per joint and side over complete strides; a side with fewer than
 /// `min_cycles` complete strides for a joint gets no curve and a warning.
 pub fn curves(

@@ -39,6 +39,9 @@ fn atomic(
     fs::rename(&tmp, &dst).map_err(io(format!("renaming to {}", dst.display())))
 }
 
+/// One row per accepted stride, joint and percent of the cycle (input frame numbers).
+const CYCLES_ALL_HEADER: &str = "side,joint,first_frame,last_frame,percent,value";
+
 const CYCLE_QUALITY_HEADER: &str = "side,first_frame,last_frame,accepted,reasons,stride_s,\
 stride_deviation,max_filled_s,mean_likelihood,thigh_ratio,shank_ratio,swapped_frames,bout";
 
@@ -70,7 +73,7 @@ fn lines(buf: &mut Vec<u8>, rows: impl IntoIterator<Item = String>) {
 }
 
 /// Writes angles.csv, events.csv, bouts.csv, cycle_quality.csv, cycles.csv,
-/// spatiotemporal.csv and keypoints_filtered.csv.
+/// cycles_all.csv (every accepted cycle), spatiotemporal.csv and keypoints_filtered.csv.
 pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
     fs::create_dir_all(out_dir).map_err(|e| KinError::Io {
         context: format!("creating {}", out_dir.display()),
@@ -158,6 +161,27 @@ pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
                         num(c.mean[p]),
                         num(c.sd[p]),
                         c.n_cycles
+                    )
+                }),
+            );
+        }
+        Ok(())
+    })?;
+    atomic(out_dir, "cycles_all.csv", |b| {
+        lines(b, [CYCLES_ALL_HEADER.to_string()]);
+        let accepted = crate::quality::accepted(&r.cycle_quality);
+        for c in crate::cycles::each(&r.angles, r.first_frame, &accepted) {
+            let s = c.stride;
+            lines(
+                b,
+                c.values.iter().enumerate().map(|(p, v)| {
+                    format!(
+                        "{},{},{},{},{p},{}",
+                        s.side.name(),
+                        c.joint,
+                        s.start,
+                        s.end,
+                        num(*v)
                     )
                 }),
             );

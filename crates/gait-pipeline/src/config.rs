@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use gait_core::Device;
 use gait_diffuse::RegeneratorConfig;
 use gait_edge::EdgeConfig;
+use gait_eval::report_config::{ExportConfig, ReportConfig};
 use gait_kin::{KinematicsConfig, PostprocessConfig};
 use gait_pose::PoseConfig;
 use gait_subject::SubjectConfig;
@@ -78,9 +79,13 @@ pub struct PipelineConfig {
     pub postprocess: PostprocessConfig,
     /// Angles, gait events, cycles and spatiotemporal parameters (gait-kin).
     pub kinematics: KinematicsConfig,
+    /// Normative data, overlay video and PDF of the report (gait-eval).
+    pub report: ReportConfig,
+    /// Files written for other tools (c3d, OpenSim, OpenPose).
+    pub export: ExportConfig,
 }
 
-const TABLES: [&str; 9] = [
+const TABLES: [&str; 11] = [
     "input",
     "run",
     "subject",
@@ -90,6 +95,8 @@ const TABLES: [&str; 9] = [
     "pose",
     "postprocess",
     "kinematics",
+    "report",
+    "export",
 ];
 
 impl PipelineConfig {
@@ -155,6 +162,8 @@ impl PipelineConfig {
             pose: table_as(origin, "pose", take("pose")?)?,
             postprocess: table_as(origin, "postprocess", take("postprocess")?)?,
             kinematics: table_as(origin, "kinematics", take("kinematics")?)?,
+            report: table_as(origin, "report", take("report")?)?,
+            export: table_as(origin, "export", take("export")?)?,
         };
         config.validate(origin)?;
         Ok(config)
@@ -195,6 +204,10 @@ impl PipelineConfig {
         self.kinematics
             .validate()
             .map_err(|e| PipelineError::config(origin, format!("[kinematics]: {e}")))?;
+        // A bad normative file is found before any frame is processed.
+        self.report.load_normative().map_err(|e| {
+            PipelineError::config(origin, format!("[report] {}", one_line(&e.to_string())))
+        })?;
         if self.regenerator.needs_edges() && matches!(self.edge, EdgeConfig::None) {
             return Err(PipelineError::config(
                 origin,

@@ -20,6 +20,9 @@ pub enum PipelineError {
     },
     #[error("cache {path}: {message}")]
     Cache { path: PathBuf, message: String },
+    /// The report, an export or the overlay video could not be written.
+    #[error("writing {what}: {message}")]
+    Output { what: String, message: String },
 }
 
 impl PipelineError {

@@ -11,6 +11,8 @@ mod error;
 pub mod input;
 pub mod interpolate;
 pub mod manifest;
+pub mod outputs;
+mod overlay;
 mod passes;
 mod plan;
 pub mod registry;
@@ -20,5 +22,6 @@ mod subject;
 
 pub use config::PipelineConfig;
 pub use error::PipelineError;
+pub use outputs::{OutputOptions, Outputs, write_outputs};
 pub use runner::{RunOptions, RunSummary, run};
 pub use selection::{SelectionConfig, SelectionRecord};

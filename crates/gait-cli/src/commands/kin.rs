@@ -4,7 +4,8 @@ use gait_pipeline::PipelineConfig;
 
 use crate::error::{CliError, one_line};
 
-/// `gait kin`: keypoints CSV -> filtered keypoints, angles, events, cycles.
+/// `gait kin`: keypoints CSV -> filtered keypoints, angles, events, cycles,
+/// exports and report.html.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Keypoints in DeepLabCut's CSV layout (e.g. a run's keypoints.csv)
@@ -57,6 +58,17 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
         .map_err(|e| CliError(one_line(&e.to_string())))?;
     gait_kin::write_outputs(&result, &args.out).map_err(|e| CliError(one_line(&e.to_string())))?;
     for w in &result.warnings {
+        eprintln!("warning: {w}");
+    }
+    // No video here: exports, report and PDF, but no overlay.
+    let outputs = gait_pipeline::write_outputs(&gait_pipeline::OutputOptions {
+        dir: &args.out,
+        input: None,
+        config: &config,
+        fps: Some(args.fps),
+        progress: false,
+    })?;
+    for w in &outputs.warnings {
         eprintln!("warning: {w}");
     }
     eprintln!(

@@ -3,6 +3,7 @@
 pub mod ablate;
 pub mod edges;
 pub mod eval;
+pub mod export;
 pub mod kin;
 pub mod models;
 pub mod run;

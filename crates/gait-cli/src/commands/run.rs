@@ -3,7 +3,7 @@ use std::path::Path;
 use gait_pipeline::RunOptions;
 
 use crate::commands::PipelineArgs;
-use crate::error::{CliError, one_line};
+use crate::error::CliError;
 
 /// `gait run`: frames -> edges -> regenerated frames -> poses -> kinematics,
 /// into a run folder (keypoints.csv, angles.csv, ..., report.html, run.json, cache/).
@@ -30,15 +30,19 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     if !config.selection.is_default_flow() {
         eprintln!("{}", summary.manifest.selection.summary());
     }
-    // The report reads what the run wrote, so it shows exactly the files a
-    // reader of the run folder gets.
-    let side = config.kinematics.prosthetic_side.map(|s| match s {
-        gait_kin::Side::Left => gait_eval::Side::Left,
-        gait_kin::Side::Right => gait_eval::Side::Right,
-    });
-    let report = gait_eval::Report::from_run_dir(&p.out, side)
-        .and_then(|r| r.write(&p.out))
-        .map_err(|e| CliError(format!("writing the report: {}", one_line(&e.to_string()))))?;
+    // The report and exports read what the run wrote, so they show exactly
+    // the files a reader of the run folder gets.
+    let outputs = gait_pipeline::write_outputs(&gait_pipeline::OutputOptions {
+        dir: &p.out,
+        input: Some(opts.input.as_path()),
+        config: &config,
+        fps: None,
+        progress: opts.progress,
+    })?;
+    for w in &outputs.warnings {
+        eprintln!("warning: {w}");
+    }
+    let report = outputs.report;
     let walked = summary.kinematics.as_ref().map_or(String::new(), |k| {
         let bouts = k.bouts.len();
         let (yes, no) = (&k.cycles_accepted, &k.cycles_rejected);

@@ -5,7 +5,7 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Draw, FONT, Figure, INTACT, PALETTE, PROSTHETIC, TRUTH, err, padded_range, render};
+use super::{Draw, FONT, Figure, PALETTE, TRUTH, err, padded_range, render};
 use crate::EvalError;
 use crate::names::Side;
 
@@ -191,77 +191,6 @@ fn panel<DB: DrawingBackend>(
         .draw()
         .map_err(err)?;
     Ok(())
-}
-
-struct Kinematics<'a> {
-    curves: &'a [CycleCurve],
-    prosthetic: Option<Side>,
-}
-
-impl Kinematics<'_> {
-    /// Colour and legend name of a side: prosthetic / intact when the
-    /// prosthetic side is set, else plain left / right (as the skeleton strip
-    /// draws them).
-    fn role(&self, side: Side) -> (RGBColor, String) {
-        match self.prosthetic {
-            Some(p) if side == p => (PROSTHETIC, format!("prosthetic ({})", side.as_str())),
-            Some(_) => (INTACT, format!("intact ({})", side.as_str())),
-            None if side == Side::Left => (INTACT, "left".into()),
-            None => (PROSTHETIC, "right".into()),
-        }
-    }
-}
-
-impl Draw for Kinematics<'_> {
-    fn draw<DB: DrawingBackend>(
-        &self,
-        root: &DrawingArea<DB, Shift>,
-        _bitmap: bool,
-    ) -> Result<(), String> {
-        let order = match self.prosthetic {
-            Some(p) => [p.other(), p],
-            None => [Side::Left, Side::Right],
-        };
-        for (area, joint) in root.split_evenly((1, 3)).iter().zip(JOINTS) {
-            let series: Vec<Series> = order
-                .iter()
-                .filter_map(|&side| {
-                    let c = self
-                        .curves
-                        .iter()
-                        .find(|c| c.side == side && c.joint == joint)?;
-                    let (color, role) = self.role(side);
-                    Some(Series {
-                        curve: c,
-                        color,
-                        label: format!("{role}, n={}", c.n_cycles),
-                        band: true,
-                    })
-                })
-                .collect();
-            panel(area, &title(joint), &series)?;
-        }
-        Ok(())
-    }
-}
-
-/// Hip, knee and ankle angles over the gait cycle, mean and SD band; with
-/// a prosthetic side, prosthetic (red) against intact (blue), else left
-/// (blue) and right (red).
-pub fn kinematics_plot(
-    curves: &[CycleCurve],
-    prosthetic_side: Option<Side>,
-) -> Result<Figure, EvalError> {
-    render(
-        &Kinematics {
-            curves,
-            prosthetic: prosthetic_side,
-        },
-        "kinematics",
-        1200,
-        400,
-        None,
-    )
 }
 
 struct Comparison<'a> {

@@ -3,6 +3,8 @@
 
 mod cycles;
 mod failure_bars;
+mod gait_graphs;
+mod map_bars;
 mod skeleton;
 
 use std::path::{Path, PathBuf};
@@ -11,8 +13,10 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-pub use cycles::{CycleCurve, comparison_plot, kinematics_plot, read_cycles_csv};
+pub use cycles::{CycleCurve, comparison_plot, read_cycles_csv};
 pub use failure_bars::{FailureEntry, failure_bars};
+pub use gait_graphs::{GraphContext, consistency_plot, gait_graphs};
+pub use map_bars::map_bars;
 pub use skeleton::{StripOptions, skeleton_strip};
 
 use crate::EvalError;
@@ -116,9 +120,9 @@ pub(crate) fn render(
     })
 }
 
-/// Line colours: intact blue, prosthetic red (as in the paper's figures).
-pub(crate) const INTACT: RGBColor = RGBColor(31, 119, 180);
-pub(crate) const PROSTHETIC: RGBColor = RGBColor(214, 39, 40);
+/// Side colours as clinical gait reports draw them (pyCGM2): left red, right blue.
+pub(crate) const LEFT: RGBColor = RGBColor(214, 39, 40);
+pub(crate) const RIGHT: RGBColor = RGBColor(31, 119, 180);
 pub(crate) const TRUTH: RGBColor = RGBColor(44, 160, 44);
 /// Further method colours, in order.
 pub(crate) const PALETTE: [RGBColor; 5] = [

@@ -7,7 +7,7 @@ use image::RgbImage;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Draw, FONT, Figure, INTACT, PROSTHETIC, err, render};
+use super::{Draw, FONT, Figure, LEFT, RIGHT, err, render};
 use crate::EvalError;
 use crate::names::to_canonical;
 
@@ -56,9 +56,9 @@ struct Strip {
 
 fn colour(name: &str) -> RGBColor {
     if name.starts_with("left_") {
-        INTACT
+        LEFT
     } else if name.starts_with("right_") {
-        PROSTHETIC
+        RIGHT
     } else {
         RGBColor(90, 90, 90)
     }

@@ -1,0 +1,161 @@
+//! A report of a `gait run` / `gait kin` output folder: it reads exactly the
+//! files a reader of the folder gets.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::normative::Normative;
+use crate::report::{Report, Table};
+use crate::scores::Scores;
+use crate::spatiotemporal::read_spatiotemporal;
+use crate::{EvalError, Side};
+
+/// Files of the run folder shown as tables, with their titles.
+const TABLES: [(&str, &str); 3] = [
+    (
+        "cycle_quality.csv",
+        "Cycle quality: every cycle found, kept or rejected",
+    ),
+    ("bouts.csv", "Walking bouts"),
+    ("events.csv", "Gait events"),
+];
+
+/// Files that, when present, are listed as downloads of the run.
+const EXPORTS: [&str; 6] = [
+    "overlay.mp4",
+    "keypoints.c3d",
+    "keypoints.trc",
+    "angles.mot",
+    "openpose",
+    "report.pdf",
+];
+
+impl Report {
+    /// The report of `dir`: `run.json` (its `warnings` arrays, anywhere, are
+    /// listed), `cycles.csv`, `cycles_all.csv`, `spatiotemporal.csv`, the
+    /// quality, bout and event tables, a skeleton strip from `keypoints.csv`,
+    /// and scores against `normative`. Absent files are left out.
+    pub fn from_run_dir(
+        dir: &Path,
+        prosthetic_side: Option<Side>,
+        normative: Option<Normative>,
+    ) -> Result<Report, EvalError> {
+        let mut r = Report {
+            prosthetic_side,
+            title: format!("Gait analysis report: {}", dir.display()),
+            ..Default::default()
+        };
+        let run = dir.join("run.json");
+        if run.exists() {
+            let text = std::fs::read_to_string(&run)
+                .map_err(|e| EvalError::io(format!("reading {}", run.display()), e))?;
+            let v: Value = serde_json::from_str(&text).map_err(|e| EvalError::input(&run, e))?;
+            collect_warnings(&v, &mut r.warnings);
+            r.subject = crate::subject_lines::describe(&v);
+            r.manifest = Some(v);
+        }
+        let cycles = dir.join("cycles.csv");
+        if cycles.exists() {
+            r.cycles = crate::plot::read_cycles_csv(&cycles)?;
+        }
+        let all = dir.join("cycles_all.csv");
+        if all.exists() {
+            r.traces = crate::cycle_traces::read_cycles_all_csv(&all)?;
+        }
+        let st = dir.join("spatiotemporal.csv");
+        if st.exists() {
+            r.spatiotemporal = read_spatiotemporal(&st)?;
+        }
+        r.toe_off = Side::BOTH.map(|s| {
+            r.spatiotemporal
+                .iter()
+                .find(|p| p.parameter == "stance" && p.side == s.as_str())
+                .map(|p| p.mean)
+                .filter(|v| v.is_finite())
+        });
+        for (file, title) in TABLES {
+            let p = dir.join(file);
+            if p.exists() {
+                r.tables.push(read_table(&p, title)?);
+            }
+        }
+        r.exports = EXPORTS
+            .iter()
+            .filter(|f| dir.join(f).exists())
+            .map(|f| f.to_string())
+            .collect();
+        r.strip = strip(dir, &r)?;
+        if let Some(n) = &normative {
+            r.scores = Some(Scores::compute(&r.cycles, n));
+        }
+        r.normative = normative;
+        Ok(r)
+    }
+}
+
+fn strip(dir: &Path, r: &Report) -> Result<Option<crate::Figure>, EvalError> {
+    let kp = dir.join("keypoints.csv");
+    if !kp.exists() {
+        return Ok(None);
+    }
+    let fps = r
+        .manifest
+        .as_ref()
+        .and_then(|m| m.get("fps"))
+        .and_then(Value::as_f64)
+        .unwrap_or(30.0);
+    let seq = crate::read_poses(&kp, fps, None)?;
+    if seq.is_empty() {
+        return Ok(None);
+    }
+    crate::plot::skeleton_strip(&seq, &[], &crate::plot::StripOptions::default()).map(Some)
+}
+
+/// Every string in arrays under a key named `warnings`, at any depth.
+fn collect_warnings(v: &Value, out: &mut Vec<String>) {
+    match v {
+        Value::Object(m) => {
+            for (k, x) in m {
+                if k == "warnings"
+                    && let Value::Array(items) = x
+                {
+                    // run.json repeats a step's warnings in its summary; list each once.
+                    for w in items.iter().filter_map(Value::as_str) {
+                        if !out.iter().any(|o| o == w) {
+                            out.push(w.to_string());
+                        }
+                    }
+                } else {
+                    collect_warnings(x, out);
+                }
+            }
+        }
+        Value::Array(items) => items.iter().for_each(|x| collect_warnings(x, out)),
+        _ => {}
+    }
+}
+
+fn read_table(path: &Path, title: &str) -> Result<Table, EvalError> {
+    let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
+    let header = r
+        .headers()
+        .map_err(|e| EvalError::input(path, e))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let mut rows = Vec::new();
+    for rec in r.records() {
+        rows.push(
+            rec.map_err(|e| EvalError::input(path, e))?
+                .iter()
+                .map(str::to_string)
+                .collect(),
+        );
+    }
+    Ok(Table {
+        title: title.into(),
+        header,
+        rows,
+    })
+}

@@ -1,0 +1,212 @@
+//! The spatiotemporal table of the report: each parameter per side, the
+//! normative range beside it, and the symmetry index.
+
+use std::path::Path;
+
+use crate::EvalError;
+use crate::names::Side;
+use crate::normative::Normative;
+use crate::report::Table;
+
+/// One row of gait-kin's `spatiotemporal.csv`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StParam {
+    pub parameter: String,
+    /// `left`, `right`, `both`, or `prosthetic_vs_intact` / `left_vs_right`.
+    pub side: String,
+    pub mean: f64,
+    pub sd: f64,
+    pub n: usize,
+    pub unit: String,
+}
+
+/// Reads `spatiotemporal.csv` (`parameter,side,mean,sd,n,unit`).
+pub fn read_spatiotemporal(path: &Path) -> Result<Vec<StParam>, EvalError> {
+    let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
+    let mut out = Vec::new();
+    for (i, rec) in r.records().enumerate() {
+        let rec = rec.map_err(|e| EvalError::input(path, e))?;
+        let cell = |k: usize| rec.get(k).unwrap_or("").trim();
+        let num = |k: usize| cell(k).parse::<f64>().unwrap_or(f64::NAN);
+        if rec.len() != 6 {
+            return Err(EvalError::input(
+                path,
+                format!("line {}: expected parameter,side,mean,sd,n,unit", i + 2),
+            ));
+        }
+        out.push(StParam {
+            parameter: cell(0).into(),
+            side: cell(1).into(),
+            mean: num(2),
+            sd: num(3),
+            n: cell(4).parse().unwrap_or(0),
+            unit: cell(5).into(),
+        });
+    }
+    Ok(out)
+}
+
+/// Parameters in the order a clinician reads them.
+const ORDER: [&str; 7] = [
+    "cadence",
+    "speed",
+    "stride_time",
+    "step_time",
+    "stance",
+    "stride_length",
+    "step_length",
+];
+
+fn label(parameter: &str) -> String {
+    parameter.replace('_', " ")
+}
+
+/// A value in our unit turned into the norm's unit, when they are comparable
+/// (cm -> m; pixels are not comparable).
+fn in_norm_unit(value: f64, ours: &str, theirs: &str) -> Option<f64> {
+    match (ours, theirs) {
+        (a, b) if a == b => Some(value),
+        ("cm", "m") | ("cm/s", "m/s") => Some(value / 100.0),
+        _ => None,
+    }
+}
+
+fn mean_sd(p: &StParam) -> String {
+    if p.sd.is_finite() {
+        format!("{:.2} ± {:.2} (n={})", p.mean, p.sd, p.n)
+    } else {
+        format!("{:.2} (n={})", p.mean, p.n)
+    }
+}
+
+/// The report's table; `norm` adds the normative column (and marks values
+/// outside mean ± 2 SD).
+pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side>) -> Table {
+    let name = |s: Side| match prosthetic {
+        Some(p) if p == s => format!("{} (prosthetic)", s.as_str()),
+        Some(_) => format!("{} (intact)", s.as_str()),
+        None => s.as_str().to_string(),
+    };
+    let sym = if prosthetic.is_some() {
+        "Symmetry index % (prosthetic vs intact)"
+    } else {
+        "Symmetry index % (left vs right)"
+    };
+    let header = vec![
+        "Parameter".into(),
+        "Unit".into(),
+        name(Side::Left),
+        name(Side::Right),
+        "Both".into(),
+        "Normative mean ± SD".into(),
+        sym.into(),
+    ];
+    let mut out = Vec::new();
+    for param in ORDER {
+        let of = |side: &str| rows.iter().find(|r| r.parameter == param && r.side == side);
+        let (l, r, b) = (of("left"), of("right"), of("both"));
+        let Some(unit) = [l, r, b].iter().flatten().map(|p| p.unit.clone()).next() else {
+            continue;
+        };
+        let sym_row = rows
+            .iter()
+            .find(|r| r.parameter == format!("symmetry_index_{param}"));
+        let norm_cell = match norm.and_then(|n| n.param(param)) {
+            None => "—".to_string(),
+            Some(n) => {
+                let ours: Vec<f64> = [l, r, b].iter().flatten().map(|p| p.mean).collect();
+                let conv: Vec<f64> = ours
+                    .iter()
+                    .filter_map(|v| in_norm_unit(*v, &unit, &n.unit))
+                    .collect();
+                let flag = if conv.is_empty() && !ours.is_empty() {
+                    " (not comparable: lengths in pixels; set kinematics.subject_height_m)"
+                } else if conv.iter().any(|v| (v - n.mean).abs() > 2.0 * n.sd) {
+                    " — outside ±2 SD"
+                } else {
+                    ""
+                };
+                format!("{:.2} ± {:.2} {}{flag}", n.mean, n.sd, n.unit)
+            }
+        };
+        let cell = |p: Option<&StParam>| p.map_or("—".to_string(), mean_sd);
+        out.push(vec![
+            label(param),
+            unit,
+            cell(l),
+            cell(r),
+            cell(b),
+            norm_cell,
+            sym_row.map_or("—".into(), |s| format!("{:.1}", s.mean)),
+        ]);
+    }
+    Table {
+        title: "Spatiotemporal parameters (accepted cycles)".into(),
+        header,
+        rows: out,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::normative::NormParam;
+
+    fn p(parameter: &str, side: &str, mean: f64, unit: &str) -> StParam {
+        StParam {
+            parameter: parameter.into(),
+            side: side.into(),
+            mean,
+            sd: 0.1,
+            n: 2,
+            unit: unit.into(),
+        }
+    }
+
+    #[test]
+    fn norms_convert_units_and_flag_outliers() {
+        let norm = Normative {
+            name: "t".into(),
+            source: String::new(),
+            curves: vec![],
+            params: vec![
+                NormParam {
+                    parameter: "speed".into(),
+                    mean: 1.3,
+                    sd: 0.1,
+                    unit: "m/s".into(),
+                },
+                NormParam {
+                    parameter: "cadence".into(),
+                    mean: 110.0,
+                    sd: 8.0,
+                    unit: "steps/min".into(),
+                },
+                NormParam {
+                    parameter: "stride_length".into(),
+                    mean: 1.4,
+                    sd: 0.1,
+                    unit: "m".into(),
+                },
+            ],
+            healthy_gps: None,
+        };
+        let rows = vec![
+            p("cadence", "both", 80.0, "steps/min"),
+            p("speed", "left", 128.0, "cm/s"),
+            p("stride_length", "left", 300.0, "px"),
+            p("symmetry_index_speed", "prosthetic_vs_intact", -2.5, "%"),
+        ];
+        let t = table(&rows, Some(&norm), Some(Side::Right));
+        assert_eq!(t.rows[0][0], "cadence");
+        assert!(t.rows[0][5].contains("outside ±2 SD"), "{:?}", t.rows[0]);
+        assert!(
+            !t.rows[1][5].contains("outside"),
+            "128 cm/s is 1.28 m/s: {:?}",
+            t.rows[1]
+        );
+        assert_eq!(t.rows[1][6], "-2.5");
+        assert!(t.rows[2][5].contains("not comparable"));
+        assert!(t.header[2].contains("intact") && t.header[6].contains("prosthetic vs intact"));
+    }
+}
