@@ -24,7 +24,8 @@ pub fn gait() -> Command {
 }
 
 /// `gait run` on `input` with the test models and the default pipeline,
-/// writing to `out`.
+/// writing to `out`. The overlay video and the PDF are off (tests/report.rs
+/// turns them on): the other tests look at keypoints, angles and cycles.
 pub fn run_on(input: &Path, out: &Path) -> Command {
     let mut cmd = gait();
     cmd.args(["run", "--no-progress", "--models-dir"])
@@ -32,7 +33,8 @@ pub fn run_on(input: &Path, out: &Path) -> Command {
         .arg("--input")
         .arg(input)
         .arg("--out")
-        .arg(out);
+        .arg(out)
+        .args(["--set", "report.overlay=false", "--set", "report.pdf=false"]);
     cmd
 }
 

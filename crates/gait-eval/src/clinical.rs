@@ -103,7 +103,16 @@ impl Report {
         };
         let header = ["Score".to_string(), side(Side::Left), side(Side::Right)];
         body.push_str(&table(&header, &rows));
-        let reference = self.normative.as_ref().and_then(|n| n.healthy_gps.clone());
+        let reference = self
+            .normative
+            .as_ref()
+            .and_then(|n| n.expected_gps())
+            .map(|g| {
+                (
+                    g,
+                    format!("healthy walker one SD off the norm: GPS {g:.1}°"),
+                )
+            });
         let fig = map_bars(s, reference)?;
         body.push_str(&figure(
             &fig,

@@ -25,9 +25,6 @@ pub struct Normative {
     pub source: String,
     pub curves: Vec<NormCurve>,
     pub params: Vec<NormParam>,
-    /// A published healthy-adult sagittal GPS (degrees) and its source, drawn
-    /// as the reference line of the MAP.
-    pub healthy_gps: Option<(f64, String)>,
 }
 
 /// Mean and SD of one joint angle over 0..100 % of the cycle (101 points).
@@ -49,13 +46,12 @@ pub struct NormParam {
 }
 
 /// One built-in set (listed in `normative_data.rs`): name, curves CSV,
-/// spatiotemporal CSV, citation, published healthy sagittal GPS.
+/// spatiotemporal CSV, citation.
 pub(crate) struct Builtin {
     pub name: &'static str,
     pub curves: &'static str,
     pub params: &'static str,
     pub source: &'static str,
-    pub healthy_gps: Option<(f64, &'static str)>,
 }
 
 const BUILTINS: &[Builtin] = crate::normative_data::BUILTINS;
@@ -77,7 +73,6 @@ impl Normative {
                 source: b.source.into(),
                 curves: parse_curves(origin, b.curves)?,
                 params: parse_params(origin, b.params)?,
-                healthy_gps: b.healthy_gps.map(|(v, s)| (v, s.to_string())),
             });
         }
         if !choice.ends_with(".csv") {
@@ -109,13 +104,30 @@ impl Normative {
             source: format!("lab file {choice}"),
             curves: parse_curves(path, &text)?,
             params,
-            healthy_gps: None,
         })
     }
 
     /// The curve of `joint`, if the set has it.
     pub fn curve(&self, joint: &str) -> Option<&NormCurve> {
         self.curves.iter().find(|c| c.joint == joint)
+    }
+
+    /// The GVS a healthy walker of the normative population is expected to
+    /// get: the RMS over the cycle of the between-subject SD (a walker one SD
+    /// off the mean everywhere). No healthy-adult sagittal GPS is published
+    /// for 2-D video, so this is the reference the report draws.
+    pub fn expected_gvs(&self, joint: &str) -> Option<f64> {
+        let c = self.curve(joint)?;
+        let ss: f64 = c.sd.iter().map(|s| s * s).sum();
+        Some((ss / c.sd.len() as f64).sqrt())
+    }
+
+    /// The sagittal GPS of that expected healthy walker (RMS of the three
+    /// expected GVS): about 6 degrees for Schwartz 2008 at free speed.
+    pub fn expected_gps(&self) -> Option<f64> {
+        let g: Option<Vec<f64>> = JOINTS.iter().map(|j| self.expected_gvs(j)).collect();
+        let g = g?;
+        Some((g.iter().map(|v| v * v).sum::<f64>() / g.len() as f64).sqrt())
     }
 
     /// The norm of a spatiotemporal parameter, if the set has it.

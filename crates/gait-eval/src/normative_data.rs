@@ -13,7 +13,6 @@ macro_rules! schwartz {
             curves: include_str!(concat!("../data/normative/", $name, ".csv")),
             params: include_str!(concat!("../data/normative/spatiotemporal_", $name, ".csv")),
             source: SCHWARTZ,
-            healthy_gps: None,
         }
     };
 }

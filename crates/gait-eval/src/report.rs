@@ -285,7 +285,7 @@ mod tests {
         .unwrap();
         std::fs::write(
             dir.path().join("spatiotemporal.csv"),
-            "parameter,side,value,unit\ncadence,,104.2,steps/min\n",
+            "parameter,side,mean,sd,n,unit\ncadence,both,104.2,,5,steps/min\n",
         )
         .unwrap();
         let html = Report::from_run_dir(dir.path(), Some(Side::Left), None)

@@ -167,7 +167,6 @@ mod tests {
                 })
                 .collect(),
             params: vec![],
-            healthy_gps: None,
         };
         // Constant offsets of 3, 4 and 12 degrees: GVS 3, 4, 12; GPS sqrt((9+16+144)/3).
         let curves: Vec<CycleCurve> = [("hip", 3.0), ("knee", -4.0), ("ankle", 12.0)]

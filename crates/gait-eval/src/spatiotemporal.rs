@@ -189,7 +189,6 @@ mod tests {
                     unit: "m".into(),
                 },
             ],
-            healthy_gps: None,
         };
         let rows = vec![
             p("cadence", "both", 80.0, "steps/min"),

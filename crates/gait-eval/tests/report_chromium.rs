@@ -193,7 +193,7 @@ fn report_loads_in_chromium_and_shows_the_plots() {
     let page = report.write(work.path()).unwrap();
     let html = std::fs::read_to_string(&page).unwrap();
     for id in [
-        "fig-kinematics",
+        "fig-gait_graphs",
         "fig-comparison",
         "fig-failure_modes",
         "fig-skeleton",

@@ -28,13 +28,14 @@ impl<'a> Canvas<'a> {
         w: usize,
         h: usize,
     ) -> Self {
-        let rows = if stride == 0 {
+        let rows = (buf.len() / 3).checked_div(stride).unwrap_or(0);
+        let w = w.min(stride.saturating_sub(x0));
+        // An empty panel has no rows either, so no row offset is ever taken.
+        let h = if w == 0 {
             0
         } else {
-            buf.len() / 3 / stride
+            h.min(rows.saturating_sub(y0))
         };
-        let w = w.min(stride.saturating_sub(x0));
-        let h = h.min(rows.saturating_sub(y0));
         Self {
             buf,
             stride,
@@ -77,9 +78,9 @@ impl<'a> Canvas<'a> {
         }
         let i = self.at(x as usize, y as usize);
         let a = u16::from(alpha);
-        for k in 0..3 {
-            let old = u16::from(self.buf[i + k]);
-            self.buf[i + k] = ((u16::from(c[k]) * a + old * (255 - a) + 127) / 255) as u8;
+        for (dst, &src) in self.buf[i..i + 3].iter_mut().zip(&c) {
+            let old = u16::from(*dst);
+            *dst = ((u16::from(src) * a + old * (255 - a) + 127) / 255) as u8;
         }
     }
 

@@ -54,7 +54,7 @@ pub(crate) struct Style {
 
 impl Style {
     pub(crate) fn for_height(h: usize) -> Self {
-        let line_r = (h as f64 / 360.0).max(1.0);
+        let line_r = (h as f64 / 300.0).max(1.0);
         Self {
             line_r,
             joint_r: line_r * 1.6 + 0.5,

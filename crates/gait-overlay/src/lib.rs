@@ -183,6 +183,15 @@ impl OverlayWriter {
                 path.display()
             )));
         };
+        // ffmpeg would only say so after the first frames: check up front.
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
+            && !dir.is_dir()
+        {
+            return Err(OverlayError::BadInput(format!(
+                "folder {} does not exist",
+                dir.display()
+            )));
+        }
         let listing = encode::probe_encoders(&opts.ffmpeg)?;
         let (codec, warning) = encode::choose(&listing, opts.encoder)?;
         let tmp = path.with_file_name(format!(".{}.partial", file_name.to_string_lossy()));

@@ -223,6 +223,12 @@ fn bad_settings_are_errors_not_panics() {
     let opts = OverlayOptions::default();
     assert!(OverlayWriter::start(&path, 64, 48, 0.0, &names(), &opts).is_err());
     assert!(OverlayWriter::start(&path, 0, 48, 30.0, &names(), &opts).is_err());
+    let nowhere = dir.path().join("no/such/folder/overlay.mp4");
+    let e = OverlayWriter::start(&nowhere, 64, 48, 30.0, &names(), &opts)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("does not exist"), "{e}");
     let missing = OverlayOptions {
         ffmpeg: "/nonexistent/ffmpeg".into(),
         ..OverlayOptions::default()

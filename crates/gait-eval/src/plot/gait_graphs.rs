@@ -78,6 +78,8 @@ fn axes<'a, DB: DrawingBackend>(
         .into_iter()
         .flat_map(|c| c.mean.iter().zip(&c.sd).flat_map(|(m, s)| [m - s, m + s]));
     let (lo, hi) = padded_range(data.chain(band));
+    // Head room for the legend, so it never hides the curves' peaks.
+    let hi = hi + 0.3 * (hi - lo);
     let mut chart = ChartBuilder::on(area)
         .caption(title(joint), (FONT, 16))
         .margin(8)

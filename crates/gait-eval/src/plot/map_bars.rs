@@ -44,15 +44,18 @@ impl Draw for Map<'_> {
             .margin(10)
             .x_label_area_size(32)
             .y_label_area_size(48)
-            .build_cartesian_2d(0f64..4f64, 0f64..top)
+            .build_cartesian_2d((0u32..4u32).into_segmented(), 0f64..top)
             .map_err(err)?;
         chart
             .configure_mesh()
             .disable_x_mesh()
             .x_labels(4)
-            .x_label_formatter(&|x| {
-                let i = x.floor() as usize;
-                GROUPS.get(i).map(|g| g.to_string()).unwrap_or_default()
+            .x_label_formatter(&|x| match x {
+                SegmentValue::CenterOf(i) => GROUPS
+                    .get(*i as usize)
+                    .map(|g| g.to_string())
+                    .unwrap_or_default(),
+                _ => String::new(),
             })
             .y_desc("RMS difference from the norm (°)")
             .label_style((FONT, 12))
@@ -65,10 +68,23 @@ impl Draw for Map<'_> {
                 Side::Left => LEFT,
                 Side::Right => RIGHT,
             };
+            // Two bars per group: the left half of a segment for the left side.
             let bars = GROUPS.iter().enumerate().filter_map(|(i, g)| {
                 let v = self.value(g, side)?;
-                let x0 = i as f64 + 0.15 + 0.35 * k as f64;
-                Some(Rectangle::new([(x0, 0.0), (x0 + 0.33, v)], col.filled()))
+                let mut rect = Rectangle::new(
+                    [
+                        (SegmentValue::Exact(i as u32), 0.0),
+                        (SegmentValue::Exact(i as u32 + 1), v),
+                    ],
+                    col.filled(),
+                );
+                rect.set_margin(
+                    0,
+                    0,
+                    if k == 0 { 12 } else { 78 },
+                    if k == 0 { 78 } else { 12 },
+                );
+                Some(rect)
             });
             chart
                 .draw_series(bars)
@@ -79,7 +95,7 @@ impl Draw for Map<'_> {
         if let Some((v, label)) = &self.reference {
             chart
                 .draw_series(DashedLineSeries::new(
-                    [(0.0, *v), (4.0, *v)],
+                    [(SegmentValue::Exact(0), *v), (SegmentValue::Exact(4), *v)],
                     6,
                     4,
                     BLACK.mix(0.6).stroke_width(1),
