@@ -363,3 +363,157 @@ fn pdf_scores_and_exports_are_written() {
     let empty = tempfile::tempdir().unwrap();
     fails_with(gait().args(["export"]).arg(empty.path()), &["give --fps"]);
 }
+
+/// `gait kin` on a committed motion-capture trial at 150 Hz (one stride a
+/// side is enough for a curve), with the report but no PDF.
+fn kin(trial: &str, out: &Path, sets: &[&str]) -> std::process::Output {
+    let mut cmd = gait();
+    cmd.args(["kin", "--fps", "150", "--keypoints"])
+        .arg(repo().join(format!("tests/data/{trial}/keypoints.csv")))
+        .arg("--out")
+        .arg(out)
+        .args([
+            "--set",
+            "report.pdf=false",
+            "--set",
+            "kinematics.min_cycles=1",
+        ]);
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    cmd.output().unwrap()
+}
+
+fn overall_gps(dir: &Path) -> f64 {
+    let scores = std::fs::read_to_string(dir.join("scores.csv")).unwrap();
+    let line = scores
+        .lines()
+        .find(|l| l.starts_with("gps_sagittal,both,"))
+        .expect("an overall GPS");
+    line.split(',').nth(3).unwrap().parse().unwrap()
+}
+
+#[test]
+fn healthy_trial_scores_like_a_healthy_walker_and_parkinsons_higher() {
+    let work = tempfile::tempdir().unwrap();
+    let (healthy, pd) = (work.path().join("healthy"), work.path().join("pd"));
+    assert!(kin("fukuchi2018", &healthy, &[]).status.success());
+    assert!(kin("gaitkit_pd", &pd, &[]).status.success());
+    let (h, p) = (overall_gps(&healthy), overall_gps(&pd));
+    // A healthy walker one between-subject SD off the Schwartz 2008 free-speed
+    // mean everywhere scores the RMS of the norm's SDs: 6.0 degrees
+    // (gait_eval::Normative::expected_gps; README of data/normative).
+    let expected = gait_eval::Normative::load("schwartz2008_free")
+        .unwrap()
+        .expected_gps()
+        .unwrap();
+    assert!((5.5..6.5).contains(&expected), "{expected}");
+    assert!(
+        h < expected,
+        "healthy sagittal GPS {h:.2} within the healthy expectation {expected:.2}"
+    );
+    assert!(p > h, "Parkinson's {p:.2} above healthy {h:.2}");
+}
+
+#[test]
+fn bad_normative_files_are_one_line_errors_naming_the_file_and_header() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("out");
+    let missing = work.path().join("lab-missing.csv");
+    let set = format!("report.normative={:?}", missing.display().to_string());
+    let mut cmd = gait();
+    cmd.args(["kin", "--fps", "150", "--keypoints"])
+        .arg(repo().join("tests/data/fukuchi2018/keypoints.csv"))
+        .arg("--out")
+        .arg(&out)
+        .args(["--set", &set]);
+    fails_with(&mut cmd, &["lab-missing.csv", "joint,percent,mean,sd"]);
+    let wrong = work.path().join("lab-wrong.csv");
+    std::fs::write(&wrong, "joint,pct,mean,sd\nhip,0,1,1\n").unwrap();
+    let set = format!("report.normative={:?}", wrong.display().to_string());
+    let mut cmd = gait();
+    cmd.args(["kin", "--fps", "150", "--keypoints"])
+        .arg(repo().join("tests/data/fukuchi2018/keypoints.csv"))
+        .arg("--out")
+        .arg(&out)
+        .args(["--set", &set]);
+    fails_with(
+        &mut cmd,
+        &["lab-wrong.csv", "expected `joint,percent,mean,sd`"],
+    );
+    assert!(
+        !out.join("report.html").exists(),
+        "nothing written before the config is checked"
+    );
+}
+
+#[test]
+fn a_run_without_an_accepted_cycle_still_gets_a_report_that_says_why() {
+    let work = tempfile::tempdir().unwrap();
+    // The first 60 frames (0.4 s) of the healthy trial: no complete stride.
+    let text =
+        std::fs::read_to_string(repo().join("tests/data/fukuchi2018/keypoints.csv")).unwrap();
+    let short: Vec<&str> = text.lines().take(3 + 60).collect();
+    let csv = work.path().join("short.csv");
+    std::fs::write(&csv, short.join("\n") + "\n").unwrap();
+    let out = work.path().join("out");
+    let mut cmd = gait();
+    cmd.args(["kin", "--fps", "150", "--keypoints"])
+        .arg(&csv)
+        .arg("--out")
+        .arg(&out)
+        .args(["--set", "report.pdf=false"]);
+    run_ok(&mut cmd);
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        html.contains("class=\"no-cycles\">No accepted gait cycle to show:"),
+        "says why"
+    );
+    assert!(!html.contains("id=\"fig-gait_graphs\""));
+}
+
+#[test]
+fn an_ffmpeg_without_libx264_falls_back_to_mpeg4_with_a_warning() {
+    let work = tempfile::tempdir().unwrap();
+    // A real ffmpeg that hides libx264 from its encoder list, as a build without it would.
+    let bin = work.path().join("bin");
+    std::fs::create_dir(&bin).unwrap();
+    let real = tool("bash", &["-c", "command -v ffmpeg"]);
+    let shim = bin.join("ffmpeg");
+    std::fs::write(
+        &shim,
+        format!(
+            "#!/bin/sh\ncase \" $* \" in *\" -encoders \"*) {0} \"$@\" | grep -v libx264 ;; *) exec {0} \"$@\" ;; esac\n",
+            real.trim()
+        ),
+    )
+    .unwrap();
+    tool("chmod", &["+x", shim.to_str().unwrap()]);
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap());
+    let out = work.path().join("run");
+    let res = run_ok(
+        common::sample_run(&out, 100, 130)
+            .env("PATH", path)
+            .args(["--set", "report.overlay=true"]),
+    );
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(
+        err.contains("warning:") && err.contains("mpeg4") && err.contains("libx264"),
+        "{err}"
+    );
+    let codec = tool(
+        "ffprobe",
+        &[
+            "-v",
+            "error",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=codec_name",
+            "-of",
+            "csv=p=0",
+            out.join("overlay.mp4").to_str().unwrap(),
+        ],
+    );
+    assert_eq!(codec.trim(), "mpeg4");
+}

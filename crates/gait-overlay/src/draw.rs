@@ -6,8 +6,10 @@ use gait_core::keypoint::{CANONICAL, LEG_SEGMENTS};
 use crate::canvas::Canvas;
 use crate::{EventKind, EventMark, Side};
 
-/// Left side: red, right side: blue, as pyCGM2 draws them (the RGB values
-/// of the report's palette).
+/// Left side: red, right side: blue, as pyCGM2 draws them (the issue asks
+/// for this). The RGB values are the report's palette, but note that
+/// gait-eval's figures (skeleton strip, kinematics) currently draw left in
+/// blue and right in red; one of the two should change to match.
 pub const LEFT_COLOUR: [u8; 3] = [214, 39, 40];
 pub const RIGHT_COLOUR: [u8; 3] = [31, 119, 180];
 /// Midline keypoints and bones (nose, neck, mid-hip): light grey, visible on
