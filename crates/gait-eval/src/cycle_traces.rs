@@ -38,7 +38,7 @@ pub fn read_cycles_all_csv(path: &Path) -> Result<Vec<CycleTrace>, EvalError> {
         let [side, joint, first_frame, _, _, value] = cells[..] else {
             return Err(bad("expected 6 cells"));
         };
-        let side: Side = side.parse().map_err(|e| bad(&format!("{e}")))?;
+        let side: Side = side.parse().map_err(|e: String| bad(&e))?;
         let first_frame: usize = first_frame
             .parse()
             .map_err(|_| bad("first_frame is not a frame number"))?;
