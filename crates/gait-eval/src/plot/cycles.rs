@@ -5,7 +5,7 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Draw, FONT, Figure, PALETTE, TRUTH, err, padded_range, render};
+use super::{Draw, Figure, PALETTE, TRUTH, cycle_axes, err, legend, padded_range, render};
 use crate::EvalError;
 use crate::names::Side;
 
@@ -128,21 +128,7 @@ fn panel<DB: DrawingBackend>(
                 [m - d, m + d]
             })
     }));
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, (FONT, 16))
-        .margin(8)
-        .x_label_area_size(32)
-        .y_label_area_size(44)
-        .build_cartesian_2d(0f64..100f64, lo..hi)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("% gait cycle")
-        .label_style((FONT, 12))
-        .axis_desc_style((FONT, 12))
-        .light_line_style(WHITE.mix(0.0))
-        .draw()
-        .map_err(err)?;
+    let mut chart = cycle_axes(area, caption, lo, hi)?;
     for s in series {
         let pts = |sign: f64| -> Vec<(f64, f64)> {
             s.curve
@@ -182,15 +168,7 @@ fn panel<DB: DrawingBackend>(
                 PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
             });
     }
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 12))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK.mix(0.3))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(err)?;
-    Ok(())
+    legend(&mut chart, SeriesLabelPosition::UpperRight)
 }
 
 struct Comparison<'a> {

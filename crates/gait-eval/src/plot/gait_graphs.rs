@@ -6,7 +6,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Draw, FONT, Figure, LEFT, RIGHT, err, padded_range, render};
+use super::{CycleChart, Draw, Figure, LEFT, RIGHT, cycle_axes, err, legend, padded_range, render};
 use crate::EvalError;
 use crate::cycle_traces::CycleTrace;
 use crate::names::Side;
@@ -60,19 +60,13 @@ fn pct(i: usize, n: usize) -> f64 {
     }
 }
 
-type Chart<'a, DB> = ChartContext<
-    'a,
-    DB,
-    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
->;
-
 /// Axes of one joint panel, with the normative band and the toe-off lines drawn.
 fn axes<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
     joint: &str,
     ctx: &GraphContext,
     data: impl Iterator<Item = f64>,
-) -> Result<Chart<'a, DB>, String> {
+) -> Result<CycleChart<'a, DB>, String> {
     let norm = ctx.normative.and_then(|n| n.curve(joint));
     let band = norm
         .into_iter()
@@ -80,21 +74,7 @@ fn axes<'a, DB: DrawingBackend>(
     let (lo, hi) = padded_range(data.chain(band));
     // Head room for the legend, so it never hides the curves' peaks.
     let hi = hi + 0.3 * (hi - lo);
-    let mut chart = ChartBuilder::on(area)
-        .caption(title(joint), (FONT, 16))
-        .margin(8)
-        .x_label_area_size(32)
-        .y_label_area_size(44)
-        .build_cartesian_2d(0f64..100f64, lo..hi)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("% gait cycle")
-        .label_style((FONT, 12))
-        .axis_desc_style((FONT, 12))
-        .light_line_style(WHITE.mix(0.0))
-        .draw()
-        .map_err(err)?;
+    let mut chart = cycle_axes(area, &title(joint), lo, hi)?;
     if let Some(c) = norm {
         let n = c.mean.len();
         let mut poly: Vec<(f64, f64)> = (0..n).map(|i| (pct(i, n), c.mean[i] + c.sd[i])).collect();
@@ -122,17 +102,6 @@ fn axes<'a, DB: DrawingBackend>(
         }
     }
     Ok(chart)
-}
-
-fn legend<'a, DB: DrawingBackend + 'a>(chart: &mut Chart<'a, DB>) -> Result<(), String> {
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 12))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK.mix(0.3))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(err)
 }
 
 struct MeanGraphs<'a> {
@@ -183,7 +152,7 @@ impl Draw for MeanGraphs<'_> {
                         PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(2))
                     });
             }
-            legend(&mut chart)?;
+            legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }
         Ok(())
     }
@@ -233,7 +202,7 @@ impl Draw for AllCycles<'_> {
                     }
                 }
             }
-            legend(&mut chart)?;
+            legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }
         Ok(())
     }

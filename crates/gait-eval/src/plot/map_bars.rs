@@ -4,7 +4,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Draw, FONT, Figure, LEFT, RIGHT, err, render};
+use super::{Draw, FONT, Figure, LEFT, RIGHT, err, legend, render};
 use crate::EvalError;
 use crate::names::Side;
 use crate::scores::Scores;
@@ -104,14 +104,7 @@ impl Draw for Map<'_> {
                 .label(label.clone())
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.mix(0.6)));
         }
-        chart
-            .configure_series_labels()
-            .label_font((FONT, 12))
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK.mix(0.3))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(err)
+        legend(&mut chart, SeriesLabelPosition::UpperLeft)
     }
 }
 

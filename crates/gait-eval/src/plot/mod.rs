@@ -133,6 +133,53 @@ pub(crate) const PALETTE: [RGBColor; 5] = [
     RGBColor(23, 190, 207),
 ];
 
+/// A chart over 0..100 % of the gait cycle with angle values `lo..hi`.
+pub(crate) type CycleChart<'a, DB> = ChartContext<
+    'a,
+    DB,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// The axes of a gait-cycle panel: `caption` above, % gait cycle along x.
+pub(crate) fn cycle_axes<'a, DB: DrawingBackend + 'a>(
+    area: &'a DrawingArea<DB, Shift>,
+    caption: &str,
+    lo: f64,
+    hi: f64,
+) -> Result<CycleChart<'a, DB>, String> {
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (FONT, 16))
+        .margin(8)
+        .x_label_area_size(32)
+        .y_label_area_size(44)
+        .build_cartesian_2d(0f64..100f64, lo..hi)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("% gait cycle")
+        .label_style((FONT, 12))
+        .axis_desc_style((FONT, 12))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
+/// The legend box every figure draws, at `position`.
+pub(crate) fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 12))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK.mix(0.3))
+        .position(position)
+        .draw()
+        .map_err(err)
+}
+
 /// Range of finite values padded by 5 %, or (-1, 1) when there are none.
 pub(crate) fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values
