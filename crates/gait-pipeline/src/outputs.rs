@@ -3,7 +3,9 @@
 //! `gait kin` and `gait export` all end here, so a folder looks the same
 //! whichever command wrote it.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use gait_eval::export::{RunFacts, export_run};
 use gait_eval::report_config::ExportFormat;
@@ -28,6 +30,8 @@ pub struct Outputs {
     pub report: PathBuf,
     pub files: Vec<PathBuf>,
     pub warnings: Vec<String>,
+    /// Wall-clock seconds of each step (exports, overlay, report, pdf), as run.json records them.
+    pub seconds: BTreeMap<&'static str, f64>,
 }
 
 fn failed(what: &str, e: impl ToString) -> PipelineError {
@@ -40,26 +44,36 @@ fn failed(what: &str, e: impl ToString) -> PipelineError {
 /// Exports, overlay, report and PDF, in that order (the report links the files).
 pub fn write_outputs(o: &OutputOptions) -> Result<Outputs, PipelineError> {
     let mut out = Outputs::default();
+    let t = Instant::now();
     let facts = RunFacts::of_dir(o.dir, o.fps).map_err(|e| failed("the exports", e))?;
     out.files = export_run(o.dir, &o.config.export.formats, &facts)
         .map_err(|e| failed("the exports", e))?;
+    out.seconds.insert("exports", t.elapsed().as_secs_f64());
     if o.config.report.overlay
         && let Some(input) = o.input
     {
+        let t = Instant::now();
         let (path, warnings) = crate::overlay::write_overlay(o.dir, input, o.config, o.progress)?;
+        out.seconds.insert("overlay", t.elapsed().as_secs_f64());
         out.files.push(path);
         out.warnings.extend(warnings);
     }
+    let t = Instant::now();
     let chromium = pdf_browser(o.config, &mut out.warnings)?;
     let report = build_report(o, chromium.is_some())?;
-    out.report = report.write(o.dir).map_err(|e| failed("report.html", e))?;
-    record(o.dir, &report)?;
+    out.report = report
+        .write(o.dir)
+        .map_err(|e| failed("report.html", e))?;
+    out.seconds.insert("report", t.elapsed().as_secs_f64());
     if let Some(browser) = chromium {
+        let t = Instant::now();
         let pdf = o.dir.join("report.pdf");
         gait_eval::pdf::print_pdf(&browser, &out.report, &pdf)
             .map_err(|e| failed("report.pdf", e))?;
+        out.seconds.insert("pdf", t.elapsed().as_secs_f64());
         out.files.push(pdf);
     }
+    record(o.dir, &report, &out.seconds)?;
     Ok(out)
 }
 
@@ -109,7 +123,11 @@ fn build_report(o: &OutputOptions, with_pdf: bool) -> Result<Report, PipelineErr
 }
 
 /// Adds the report's scores and files to run.json (when there is one).
-fn record(dir: &Path, report: &Report) -> Result<(), PipelineError> {
+fn record(
+    dir: &Path,
+    report: &Report,
+    seconds: &BTreeMap<&'static str, f64>,
+) -> Result<(), PipelineError> {
     let path = dir.join("run.json");
     let Ok(text) = std::fs::read_to_string(&path) else {
         return Ok(());
@@ -129,6 +147,7 @@ fn record(dir: &Path, report: &Report) -> Result<(), PipelineError> {
                 "scores": report.scores,
                 "exports": formats,
                 "files": report.exports,
+                "seconds": seconds,
             }),
         );
     }
