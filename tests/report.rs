@@ -409,3 +409,73 @@ fn an_ffmpeg_without_libx264_falls_back_to_mpeg4_with_a_warning() {
     );
     assert_eq!(codec.trim(), "mpeg4");
 }
+
+#[test]
+fn zero_shot_overlay_side_by_side_shows_the_regenerated_frames() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("run");
+    let mut cmd = common::sample_run(&out, 100, 109);
+    for s in common::tiny_controlnet_sets() {
+        cmd.args(["--set", &s]);
+    }
+    run_ok(cmd.args([
+        "--set",
+        "report.overlay=true",
+        "--set",
+        "report.overlay_layout=\"side_by_side\"",
+    ]));
+    let video = out.join("overlay.mp4");
+    let probe = tool(
+        "ffprobe",
+        &[
+            "-v",
+            "error",
+            "-count_frames",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=width,height,nb_read_frames",
+            "-of",
+            "default=nw=1",
+            video.to_str().unwrap(),
+        ],
+    );
+    assert!(probe.contains("nb_read_frames=10"), "{probe}");
+    // Three panels of the 1768x994 input, each halved (the input is wider than 1280 px).
+    assert!(
+        probe.contains("width=2652") && probe.contains("height=498"),
+        "{probe}"
+    );
+    // The middle panel is the regenerated image (the tiny random model draws noise), not the original.
+    let png = work.path().join("f.png");
+    tool(
+        "ffmpeg",
+        &[
+            "-v",
+            "error",
+            "-i",
+            video.to_str().unwrap(),
+            "-vframes",
+            "1",
+            png.to_str().unwrap(),
+        ],
+    );
+    let img = image::open(&png).unwrap().to_rgb8();
+    let diff: u64 = (0..img.height())
+        .step_by(4)
+        .flat_map(|y| (0..884).step_by(4).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let (a, b) = (img.get_pixel(x, y).0, img.get_pixel(x + 884, y).0);
+            a.iter()
+                .zip(b)
+                .map(|(p, q)| u64::from(p.abs_diff(q)))
+                .sum::<u64>()
+        })
+        .sum();
+    let n = u64::from(img.height() / 4) * 221 * 3;
+    assert!(
+        diff / n > 20,
+        "mean difference original vs regenerated panel {}",
+        diff / n
+    );
+}

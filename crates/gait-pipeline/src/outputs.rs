@@ -61,9 +61,7 @@ pub fn write_outputs(o: &OutputOptions) -> Result<Outputs, PipelineError> {
     let t = Instant::now();
     let chromium = pdf_browser(o.config, &mut out.warnings)?;
     let report = build_report(o, chromium.is_some())?;
-    out.report = report
-        .write(o.dir)
-        .map_err(|e| failed("report.html", e))?;
+    out.report = report.write(o.dir).map_err(|e| failed("report.html", e))?;
     out.seconds.insert("report", t.elapsed().as_secs_f64());
     if let Some(browser) = chromium {
         let t = Instant::now();
