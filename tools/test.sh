@@ -5,4 +5,6 @@ cd "$(dirname "$0")/.."
 source tools/setup.sh
 cargo build -p gait-cli
 target/debug/gait models fetch blazepose
+# ezc3d, the reference C3D reader the export tests check keypoints.c3d with.
+bash tools/export/setup_ezc3d.sh >/dev/null
 cargo test --workspace

@@ -57,8 +57,11 @@ Changes
 
 Writes (into OUT, default crates/gait-eval/data/normative beside this repository's tools/)
     schwartz2008_<stratum>.csv                joint,percent,mean,sd  (hip, knee, ankle; 303 rows)
-    spatiotemporal_schwartz2008_<stratum>.csv parameter,mean,sd,unit (stance only: the workbook's
-                                              speed, cadence and step length are dimensionless)
+    spatiotemporal_schwartz2008_<stratum>.csv parameter,mean,sd,unit: stance (%), and speed,
+                                              cadence and step length in Hof's dimensionless
+                                              form (units v/sqrt(gL), f*sqrt(L/g), s/L) from
+                                              the ANOVA sheet; the report scales them by the
+                                              subject's leg length
     with <stratum> one of very_slow, slow, free, fast, very_fast.
 
 Usage
@@ -90,6 +93,13 @@ JOINTS = [("hip", "Hip Flex/Extension"), ("knee", "Knee Flex/Extension"),
           ("ankle", "Ankle Dorsi/Plantarflexion")]
 PELVIC_TILT = "Pelvic Ant/Posterior Tilt"
 STANCE_ROW = "Ipsilateral Foot Off  [% cycle]"
+# Sheet "ANOVA": the dimensionless (Hof 1996) parameters, one row per stratum in STRATA order
+# under the variable's label (column 0), stratum name in column 1, mean in 3 and SD in 4.
+# Output parameter -> (label, unit as the report reads it: L leg length, g 9.81 m/s2).
+HOF = [("speed", "Dimensionless Speed", "v/sqrt(gL)"),
+       ("cadence", "Dimensionless Cadence", "f*sqrt(L/g)"),
+       ("step_length", "Dimensionless Step Length", "s/L")]
+HOF_STRATA = ["Very Slow", "Slow", "Free", "Fast", "Very Fast"]
 
 
 def sha256(path: Path) -> str:
@@ -181,6 +191,18 @@ def build(cache: Path, hip_relative_to_pelvis: bool = False) -> dict:
     stance_row = [r for r in range(events.nrows) if events.cell_value(r, 0) == STANCE_ROW]
     assert len(stance_row) == 1
 
+    anova = book.sheet_by_name("ANOVA")
+    hof = {}
+    for name, label, unit in HOF:
+        rows = [r for r in range(anova.nrows) if anova.cell_value(r, 0) == label]
+        assert len(rows) == 1, label
+        for k, (stratum, _, _) in enumerate(STRATA):
+            r = rows[0] + k
+            assert anova.cell_value(r, 1) == HOF_STRATA[k], (label, r)
+            m, sd = float(anova.cell_value(r, 3)), float(anova.cell_value(r, 4))
+            assert 0 < m < 1.5 and 0 < sd < 0.2, (label, stratum, m, sd)
+            hof.setdefault(stratum, []).append(f"{name},{fmt(m)},{fmt(sd)},{unit}")
+
     files = {}
     for stratum, col, ev_col in STRATA:
         c = curves(rot, col, hip_relative_to_pelvis)
@@ -195,8 +217,9 @@ def build(cache: Path, hip_relative_to_pelvis: bool = False) -> dict:
         m = 100.0 * float(events.cell_value(r, ev_col))
         s = 100.0 * abs(float(events.cell_value(r, ev_col + 1)))
         assert 50 < m < 75 and 0 < s < 10, (stratum, m, s)
+        rows = [f"stance,{fmt(m)},{fmt(s)},%"] + hof[stratum]
         files[f"spatiotemporal_schwartz2008_{stratum}.csv"] = (
-            "parameter,mean,sd,unit\n" f"stance,{fmt(m)},{fmt(s)},%\n")
+            "parameter,mean,sd,unit\n" + "\n".join(rows) + "\n")
     return files
 
 

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::EvalError;
 use crate::names::Side;
-use crate::normative::Normative;
+use crate::normative::{NormParam, Normative};
 use crate::report::Table;
 
 /// One row of gait-kin's `spatiotemporal.csv`.
@@ -47,7 +47,7 @@ pub fn read_spatiotemporal(path: &Path) -> Result<Vec<StParam>, EvalError> {
 }
 
 /// Parameters in the order a clinician reads them.
-const ORDER: [&str; 7] = [
+const ORDER: [&str; 8] = [
     "cadence",
     "speed",
     "stride_time",
@@ -55,20 +55,29 @@ const ORDER: [&str; 7] = [
     "stance",
     "stride_length",
     "step_length",
+    "leg_length",
 ];
 
 fn label(parameter: &str) -> String {
     parameter.replace('_', " ")
 }
 
-/// A value in our unit turned into the norm's unit, when they are comparable
-/// (cm -> m; pixels are not comparable).
-fn in_norm_unit(value: f64, ours: &str, theirs: &str) -> Option<f64> {
-    match (ours, theirs) {
-        (a, b) if a == b => Some(value),
-        ("cm", "m") | ("cm/s", "m/s") => Some(value / 100.0),
-        _ => None,
-    }
+/// Gravity for Hof's dimensionless parameters (m/s^2).
+const G: f64 = 9.81;
+
+/// The norm's mean and SD in our unit `ours`, when they can be compared: the
+/// same unit, cm against m, or one of Hof's dimensionless forms scaled by the
+/// subject's leg length `leg` (value, unit; speed and cadence need it in cm).
+fn norm_in(ours: &str, n: &NormParam, leg: Option<(f64, &str)>) -> Option<(f64, f64)> {
+    let factor = match (ours, n.unit.as_str(), leg) {
+        (a, b, _) if a == b => 1.0,
+        ("cm", "m", _) | ("cm/s", "m/s", _) => 100.0,
+        (a, "s/L", Some((l, u))) if a == u => l,
+        ("cm/s", "v/sqrt(gL)", Some((l, "cm"))) => (G * l / 100.0).sqrt() * 100.0,
+        ("steps/min", "f*sqrt(L/g)", Some((l, "cm"))) => 60.0 * (G / (l / 100.0)).sqrt(),
+        _ => return None,
+    };
+    Some((n.mean * factor, n.sd * factor))
 }
 
 fn mean_sd(p: &StParam) -> String {
@@ -101,6 +110,10 @@ pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side
         "Normative mean ± SD".into(),
         sym.into(),
     ];
+    let leg = rows
+        .iter()
+        .find(|r| r.parameter == "leg_length" && r.mean.is_finite())
+        .map(|r| (r.mean, r.unit.as_str()));
     let mut out = Vec::new();
     for param in ORDER {
         let of = |side: &str| rows.iter().find(|r| r.parameter == param && r.side == side);
@@ -113,21 +126,23 @@ pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side
             .find(|r| r.parameter == format!("symmetry_index_{param}"));
         let norm_cell = match norm.and_then(|n| n.param(param)) {
             None => "—".to_string(),
-            Some(n) => {
-                let ours: Vec<f64> = [l, r, b].iter().flatten().map(|p| p.mean).collect();
-                let conv: Vec<f64> = ours
-                    .iter()
-                    .filter_map(|v| in_norm_unit(*v, &unit, &n.unit))
-                    .collect();
-                let flag = if conv.is_empty() && !ours.is_empty() {
-                    " (not comparable: lengths in pixels; set kinematics.subject_height_m)"
-                } else if conv.iter().any(|v| (v - n.mean).abs() > 2.0 * n.sd) {
-                    " — outside ±2 SD"
-                } else {
-                    ""
-                };
-                format!("{:.2} ± {:.2} {}{flag}", n.mean, n.sd, n.unit)
-            }
+            Some(n) => match norm_in(&unit, n, leg) {
+                None => format!(
+                    "{:.2} ± {:.2} {} (needs a scale to compare: set kinematics.subject_height_m)",
+                    n.mean, n.sd, n.unit
+                ),
+                Some((m, sd)) => {
+                    let ours = [l, r, b].into_iter().flatten().map(|p| p.mean);
+                    let outside = ours.into_iter().any(|v| (v - m).abs() > 2.0 * sd);
+                    let flag = if outside { " — outside ±2 SD" } else { "" };
+                    let hof = if n.unit == unit {
+                        String::new()
+                    } else {
+                        format!(" ({:.2} ± {:.2} {})", n.mean, n.sd, n.unit)
+                    };
+                    format!("{m:.2} ± {sd:.2}{hof}{flag}")
+                }
+            },
         };
         let cell = |p: Option<&StParam>| p.map_or("—".to_string(), mean_sd);
         out.push(vec![
@@ -150,7 +165,6 @@ pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::normative::NormParam;
 
     fn p(parameter: &str, side: &str, mean: f64, unit: &str) -> StParam {
         StParam {
@@ -188,6 +202,12 @@ mod tests {
                     sd: 0.1,
                     unit: "m".into(),
                 },
+                NormParam {
+                    parameter: "step_length".into(),
+                    mean: 0.76,
+                    sd: 0.04,
+                    unit: "s/L".into(),
+                },
             ],
         };
         let rows = vec![
@@ -195,6 +215,8 @@ mod tests {
             p("speed", "left", 128.0, "cm/s"),
             p("stride_length", "left", 300.0, "px"),
             p("symmetry_index_speed", "prosthetic_vs_intact", -2.5, "%"),
+            p("step_length", "left", 190.0, "px"),
+            p("leg_length", "both", 250.0, "px"),
         ];
         let t = table(&rows, Some(&norm), Some(Side::Right));
         assert_eq!(t.rows[0][0], "cadence");
@@ -205,7 +227,27 @@ mod tests {
             t.rows[1]
         );
         assert_eq!(t.rows[1][6], "-2.5");
-        assert!(t.rows[2][5].contains("not comparable"));
+        assert!(t.rows[2][5].contains("needs a scale"), "{:?}", t.rows[2]);
+        // Hof: 0.76 leg lengths of 250 px = 190 px.
+        assert!(
+            t.rows[3][5].starts_with("190.00 ± 10.00 (0.76 ± 0.04 s/L)"),
+            "{:?}",
+            t.rows[3]
+        );
+        assert_eq!(
+            norm_in(
+                "steps/min",
+                &NormParam {
+                    parameter: "cadence".into(),
+                    mean: 0.5648,
+                    sd: 0.0374,
+                    unit: "f*sqrt(L/g)".into()
+                },
+                Some((90.0, "cm"))
+            )
+            .map(|(m, _)| m.round()),
+            Some(112.0)
+        );
         assert!(t.header[2].contains("intact") && t.header[6].contains("prosthetic vs intact"));
     }
 }

@@ -151,6 +151,19 @@ pub fn compute(
         all_strides.iter().map(|s| 120.0 / s).collect()
     };
     out.push(row("cadence", "both", &cadence, "steps/min"));
+    // Thigh + shank (median over frames): the leg length L that Hof's dimensionless speed,
+    // cadence and step length are scaled by, so the report can set them against the norms.
+    let leg = t.leg_length() / per;
+    if leg.is_finite() && leg > 0.0 {
+        out.push(Param {
+            parameter: "leg_length".into(),
+            side: "both".into(),
+            mean: leg,
+            sd: f64::NAN,
+            n: t.len(),
+            unit: len_unit.into(),
+        });
+    }
     for (side, params) in &per_side {
         for ((name, unit), v) in names.iter().zip(params) {
             out.push(row(name, side.name(), v, unit));
