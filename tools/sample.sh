@@ -10,4 +10,4 @@ source tools/setup.sh
 cargo build -p gait-cli
 target/debug/gait models fetch blazepose
 target/debug/gait run --input data/sample/sports2d-demo.mp4 --out runs/sample "$@"
-echo "results in runs/sample (keypoints.csv, angles.csv, cycles.csv, report.html, run.json)"
+echo "results in runs/sample (report.html, report.pdf, overlay.mp4, keypoints.csv, angles.csv, cycles.csv, keypoints.c3d, run.json)"
