@@ -269,13 +269,7 @@ fn layout_of(page: &Path, work: &Path) -> serde_json::Value {
 }
 
 fn gait_eval_chromium() -> PathBuf {
-    ["chromium", "chromium-browser", "google-chrome"]
-        .iter()
-        .find_map(|n| {
-            std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
-                .map(|d| d.join(n))
-                .find(|p| p.is_file())
-        })
+    gait_eval::pdf::find_chromium()
         .expect("headless Chromium is needed: apt-get install chromium (tools/setup.sh does)")
 }
 

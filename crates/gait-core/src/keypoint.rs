@@ -38,6 +38,17 @@ pub const LOWER_LIMB: [&str; 10] = [
     "right_toe",
 ];
 
+/// Segments above the legs (head, shoulders, trunk, pelvis), by canonical
+/// name; drawn with [`LEG_SEGMENTS`] as the skeleton.
+pub const UPPER_SEGMENTS: [(&str, &str); 6] = [
+    ("nose", "neck"),
+    ("neck", "left_shoulder"),
+    ("neck", "right_shoulder"),
+    ("neck", "mid_hip"),
+    ("mid_hip", "left_hip"),
+    ("mid_hip", "right_hip"),
+];
+
 /// The segments joining [`LOWER_LIMB`]'s keypoints, leg by leg (thigh, shank,
 /// and the foot's triangle): what leg masks and skeleton plots draw.
 pub const LEG_SEGMENTS: [(&str, &str); 10] = [

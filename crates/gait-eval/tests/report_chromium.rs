@@ -13,22 +13,11 @@ use gait_eval::{
 };
 
 fn chromium() -> PathBuf {
-    if let Ok(p) = std::env::var("CHROMIUM") {
-        return PathBuf::from(p);
-    }
-    for name in ["chromium", "chromium-browser", "google-chrome"] {
-        if let Some(dir) = std::env::var_os("PATH")
-            .map(|p| std::env::split_paths(&p).collect::<Vec<_>>())
-            .unwrap_or_default()
-            .into_iter()
-            .find(|d| d.join(name).is_file())
-        {
-            return dir.join(name);
-        }
-    }
-    panic!(
-        "headless Chromium not found: install the Debian package `chromium` (apt-get install -y chromium) or set CHROMIUM=/path/to/chromium"
-    );
+    gait_eval::pdf::find_chromium().unwrap_or_else(|| {
+        panic!(
+            "headless Chromium not found: install the Debian package `chromium` (apt-get install -y chromium) or set CHROMIUM=/path/to/chromium"
+        )
+    })
 }
 
 /// Loads `page` and returns Chromium's console lines and the screenshot.

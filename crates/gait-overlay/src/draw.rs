@@ -1,7 +1,7 @@
 //! The skeleton and the event markers, in side colours.
 
 use gait_core::Pose;
-use gait_core::keypoint::{CANONICAL, LEG_SEGMENTS};
+use gait_core::keypoint::{CANONICAL, LEG_SEGMENTS, UPPER_SEGMENTS};
 
 use crate::canvas::Canvas;
 use crate::{EventKind, EventMark, Side};
@@ -16,16 +16,6 @@ pub const RIGHT_COLOUR: [u8; 3] = [31, 119, 180];
 /// dark and bright video alike.
 pub const CENTRE_COLOUR: [u8; 3] = [235, 235, 235];
 const OUTLINE: [u8; 3] = [255, 255, 255];
-
-/// Bones above the legs, by canonical name (as gait-eval's skeleton strip).
-const UPPER_BONES: [(&str, &str); 6] = [
-    ("nose", "neck"),
-    ("neck", "left_shoulder"),
-    ("neck", "right_shoulder"),
-    ("neck", "mid_hip"),
-    ("mid_hip", "left_hip"),
-    ("mid_hip", "right_hip"),
-];
 
 /// Colour of a side.
 pub fn side_colour(side: Side) -> [u8; 3] {
@@ -80,7 +70,7 @@ impl Skeleton {
     /// canonical name at all shows every keypoint as a grey dot.
     pub(crate) fn new(names: &[String]) -> Self {
         let idx = |n: &str| names.iter().position(|m| m == n);
-        let bones = UPPER_BONES
+        let bones = UPPER_SEGMENTS
             .iter()
             .chain(LEG_SEGMENTS.iter())
             .filter_map(|&(a, b)| {

@@ -5,7 +5,9 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Draw, Figure, PALETTE, TRUTH, cycle_axes, err, legend, padded_range, render};
+use super::{
+    Draw, Figure, PALETTE, TRUTH, cycle_axes, err, legend, line_key, padded_range, render,
+};
 use crate::EvalError;
 use crate::names::Side;
 
@@ -164,9 +166,7 @@ fn panel<DB: DrawingBackend>(
             .draw_series(LineSeries::new(line, color.stroke_width(2)))
             .map_err(err)?
             .label(s.label.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
+            .legend(line_key(color, 2));
     }
     legend(&mut chart, SeriesLabelPosition::UpperRight)
 }

@@ -6,7 +6,9 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{CycleChart, Draw, Figure, LEFT, RIGHT, cycle_axes, err, legend, padded_range, render};
+use super::{
+    CycleChart, Draw, Figure, LEFT, RIGHT, cycle_axes, err, legend, line_key, padded_range, render,
+};
 use crate::EvalError;
 use crate::cycle_traces::CycleTrace;
 use crate::names::Side;
@@ -148,9 +150,7 @@ impl Draw for MeanGraphs<'_> {
                     .draw_series(LineSeries::new(pts(0.0), col.stroke_width(2)))
                     .map_err(err)?
                     .label(format!("{}, n={}", self.ctx.name(c.side), c.n_cycles))
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(2))
-                    });
+                    .legend(line_key(col, 2));
             }
             legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }
@@ -196,9 +196,7 @@ impl Draw for AllCycles<'_> {
                     if k == 0 {
                         series
                             .label(format!("{}, {} cycles", self.ctx.name(side), of_side.len()))
-                            .legend(move |(x, y)| {
-                                PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(1))
-                            });
+                            .legend(line_key(col, 1));
                     }
                 }
             }

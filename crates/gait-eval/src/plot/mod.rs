@@ -165,6 +165,14 @@ pub(crate) fn cycle_axes<'a, DB: DrawingBackend + 'a>(
     Ok(chart)
 }
 
+/// The legend's sample of a line series in `colour`.
+pub(crate) fn line_key(
+    colour: RGBColor,
+    width: u32,
+) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(width))
+}
+
 /// The legend box every figure draws, at `position`.
 pub(crate) fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,

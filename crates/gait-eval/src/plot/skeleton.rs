@@ -29,17 +29,6 @@ impl Default for StripOptions {
     }
 }
 
-/// Segments drawn above the legs, by canonical name (the legs: gait-core's
-/// `LEG_SEGMENTS`).
-const UPPER_BONES: [(&str, &str); 6] = [
-    ("nose", "neck"),
-    ("neck", "left_shoulder"),
-    ("neck", "right_shoulder"),
-    ("neck", "mid_hip"),
-    ("mid_hip", "left_hip"),
-    ("mid_hip", "right_hip"),
-];
-
 /// One panel: where it sits and how image coordinates map into it.
 struct Panel {
     frame: usize,
@@ -77,7 +66,10 @@ impl Draw for Strip {
                     ((y - p.origin.1) * p.scale).round() as i32,
                 )
             };
-            for &(a, b) in UPPER_BONES.iter().chain(&gait_core::keypoint::LEG_SEGMENTS) {
+            for &(a, b) in gait_core::keypoint::UPPER_SEGMENTS
+                .iter()
+                .chain(&gait_core::keypoint::LEG_SEGMENTS)
+            {
                 if let (Some(&pa), Some(&pb)) = (p.points.get(a), p.points.get(b)) {
                     let c = if colour(a) == colour(b) {
                         colour(a)
