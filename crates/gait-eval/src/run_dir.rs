@@ -74,6 +74,9 @@ impl Report {
                 .map(|p| p.mean)
                 .filter(|v| v.is_finite())
         });
+        if let Some(t) = r.manifest.as_ref().and_then(corrections_table) {
+            r.tables.push(t);
+        }
         for (file, title) in TABLES {
             let p = dir.join(file);
             if p.exists() {
@@ -110,6 +113,34 @@ fn strip(dir: &Path, r: &Report) -> Result<Option<crate::Figure>, EvalError> {
         return Ok(None);
     }
     crate::plot::skeleton_strip(&seq, &[], &crate::plot::StripOptions::default()).map(Some)
+}
+
+/// The corrections a person applied (run.json's kinematics summary), as a table.
+fn corrections_table(manifest: &Value) -> Option<Table> {
+    let c = manifest.pointer("/extra/kinematics/corrections")?;
+    let n = |k: &str| c.get(k).and_then(Value::as_u64).unwrap_or(0).to_string();
+    let sha = c.get("sha256").and_then(Value::as_str).unwrap_or("");
+    let path = c.get("path").and_then(Value::as_str).unwrap_or("");
+    Some(Table {
+        title: format!(
+            "Corrections applied ({path}, sha256 {})",
+            sha.get(..12).unwrap_or(sha)
+        ),
+        header: ["correction", "entries", "frames"]
+            .map(String::from)
+            .to_vec(),
+        rows: vec![
+            vec!["swap left/right".into(), n("swaps"), n("swapped_frames")],
+            vec!["event added".into(), n("events_added"), String::new()],
+            vec!["event removed".into(), n("events_removed"), String::new()],
+            vec![
+                "frames excluded".into(),
+                n("excludes"),
+                n("excluded_frames"),
+            ],
+            vec!["keypoint set".into(), n("keypoints"), String::new()],
+        ],
+    })
 }
 
 /// Every string in arrays under a key named `warnings`, at any depth.

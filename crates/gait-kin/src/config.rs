@@ -204,6 +204,9 @@ pub struct KinematicsConfig {
     /// of its frames is rejected (0: any corrected frame rejects). A few single-frame label
     /// flips, corrected, are ordinary for BlazePose's far leg; many mean the labels are unsure.
     pub cycle_max_swapped_share: f64,
+    /// corrections.toml written by a person, a script or `gait review`: swaps, events, excluded
+    /// frames, keypoints (format: `gait_kin::corrections`). Read and checked by the analysis.
+    pub corrections: Option<PathBuf>,
 }
 
 impl Default for KinematicsConfig {
@@ -228,6 +231,7 @@ impl Default for KinematicsConfig {
             cycle_min_likelihood: 0.5,
             cycle_segment_tolerance: 0.2,
             cycle_max_swapped_share: 0.1,
+            corrections: None,
         }
     }
 }
@@ -372,6 +376,10 @@ mod tests {
             toml::from_str("frame_size = [1768, 994]\nbouts = [[10, 80], [100, 200]]").unwrap();
         assert_eq!(k.frame_size, Some([1768, 994]));
         assert_eq!(k.bouts, Some(vec![[10, 80], [100, 200]]));
+        let c: KinematicsConfig = toml::from_str("corrections = \"corrections.toml\"").unwrap();
+        assert_eq!(c.corrections, Some(PathBuf::from("corrections.toml")));
+        let back: KinematicsConfig = toml::from_str(&toml::to_string(&c).unwrap()).unwrap();
+        assert_eq!(back, c);
         assert!(k.validate().is_ok());
         let back: KinematicsConfig = toml::from_str(&toml::to_string(&k).unwrap()).unwrap();
         assert_eq!(back, k);

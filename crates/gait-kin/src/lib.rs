@@ -14,12 +14,18 @@
 //! (heel strike to the next of the same foot) with its reasons; only accepted strides enter
 //! the mean curves and the spatiotemporal parameters. Events from `kinematics.events_csv` are
 //! the user's and are kept as given, unless `kinematics.bouts` is set too.
+//!
+//! `kinematics.corrections` names a [`corrections`] file a person or a script wrote: leg labels
+//! swapped by hand (after the automatic swap correction), keypoints set by hand (before gap
+//! filling), events added or removed (after the bout filter) and frames excluded from events
+//! and cycles.
 
 pub mod angles;
 pub mod bouts;
 pub mod butterworth;
 pub mod collapse;
 pub mod config;
+pub mod corrections;
 pub mod cycles;
 pub mod direction;
 pub mod events;
@@ -44,6 +50,9 @@ pub use angles::Angles;
 pub use bouts::Bout;
 pub use collapse::CollapseRule;
 pub use config::{FilterKind, GapFillKind, KinematicsConfig, PostprocessConfig, Side};
+pub use corrections::{
+    Corrections, CorrectionsSummary, EventAction, EventEdit, FrameRange, KeypointEdit,
+};
 pub use cycles::{CycleCurve, Stride};
 pub use direction::Direction;
 pub use events::{Event, EventDetector, EventKind, ZeniRefined};
@@ -64,6 +73,10 @@ pub enum KinError {
     BadInput(String),
     #[error("events file {path}: {reason}")]
     EventsCsv { path: PathBuf, reason: String },
+    /// A corrections file that cannot be parsed or does not fit the keypoints; `message` is one
+    /// line naming the entry.
+    #[error("{}: {message}", path.display())]
+    Corrections { path: PathBuf, message: String },
     #[error("{context}: {source}")]
     Io {
         context: String,
@@ -89,7 +102,8 @@ pub struct KinResult {
     /// Input frame number of the first row of the per-frame series.
     pub first_frame: usize,
     pub n_frames: usize,
-    /// Frames whose left/right leg labels were exchanged and corrected.
+    /// Frames whose left/right leg labels the automatic swap correction exchanged (not counting
+    /// frames a person swapped in the corrections).
     pub swapped_frames: usize,
     /// Frames whose lower-leg keypoints were dropped because both legs were drawn on one
     /// (see [`collapse`]); gap filling bridges them.
@@ -105,7 +119,8 @@ pub struct KinResult {
     pub angles: Angles,
     /// Frames of steady walking; detected events outside every bout are dropped.
     pub bouts: Vec<Bout>,
-    /// Gait events inside the bouts (all of them when read from `kinematics.events_csv`).
+    /// Gait events inside the bouts (all of them when read from `kinematics.events_csv`),
+    /// with the corrections' events added and removed and none in excluded frames.
     pub events: Vec<Event>,
     /// True when the events came from `kinematics.events_csv`.
     pub events_from_file: bool,
@@ -120,6 +135,8 @@ pub struct KinResult {
     pub spatiotemporal: Vec<Param>,
     /// Pixels per cm when a scale was configured.
     pub px_per_cm: Option<f64>,
+    /// What was applied from `kinematics.corrections`, when set.
+    pub corrections: Option<CorrectionsSummary>,
     pub warnings: Vec<String>,
     /// The cleaned keypoints on the dense timeline (written as keypoints_filtered.csv).
     #[serde(skip)]
@@ -184,7 +201,18 @@ pub fn analyse_with(
     check_input(seq, post, kin)?;
     let fps = seq.fps;
     let mut warnings = Vec::new();
-    let c = clean(seq, post, steps, &mut warnings);
+    let corr = match &kin.corrections {
+        Some(p) => {
+            let (c, sha) = corrections::load(p, seq)?;
+            let summary = corrections::summary(&c, p, sha);
+            warnings.push(corrections::warning(&summary));
+            Some((c, p.as_path(), summary))
+        }
+        None => None,
+    };
+    let no_corrections = Corrections::default();
+    let fixes = corr.as_ref().map_or(&no_corrections, |c| &c.0);
+    let c = clean(seq, post, steps, fixes, &mut warnings);
     let (t, n) = (&c.clean, c.clean.len());
     let dirs = directions(t, &mut warnings);
     let angles = angles::compute(t, &dirs.per_frame);
@@ -214,6 +242,9 @@ pub fn analyse_with(
     if enforce_bouts {
         events.retain(|e| bouts::bout_of(&bouts, e.frame).is_some());
     }
+    if let Some((c, path, _)) = &corr {
+        corrections::apply_events(c, &mut events, path)?;
+    }
     for side in Side::BOTH {
         if !events
             .iter()
@@ -230,6 +261,7 @@ pub fn analyse_with(
         swapped: &c.swapped,
         bouts: &bouts,
         enforce_bouts,
+        excluded: &fixes.exclude,
     };
     let cycle_quality = quality::assess(&evidence, &strides, kin);
     warnings.extend(quality::warnings(&cycle_quality, kin));
@@ -242,8 +274,10 @@ pub fn analyse_with(
         kin.min_cycles,
         &mut warnings,
     );
-    let step_ok =
-        |a: usize, b: usize| quality::step_ok(&cycle_quality, &bouts, enforce_bouts, a, b);
+    let step_ok = |a: usize, b: usize| {
+        !corrections::excluded_overlap(&fixes.exclude, a, b)
+            && quality::step_ok(&cycle_quality, &bouts, enforce_bouts, a, b)
+    };
     let spatiotemporal = spatiotemporal::compute(t, &events, &accepted, &step_ok, kin);
     let px_per_cm = spatiotemporal::px_per_cm(t, kin);
     if (kin.subject_height_m.is_some() || kin.known_length_px.is_some()) && px_per_cm.is_none() {
@@ -270,6 +304,7 @@ pub fn analyse_with(
         cycles,
         spatiotemporal,
         px_per_cm,
+        corrections: corr.map(|c| c.2),
         warnings,
         filtered: t.to_sequence(),
     })
@@ -312,17 +347,19 @@ struct Cleaned {
     gated: Tracks,
     /// The model's likelihoods before the gate, leg labels swap-corrected.
     raw_likelihood: Vec<Vec<f64>>,
+    /// Frames the automatic swap correction exchanged, outside the ranges a person swapped.
     swapped: Vec<bool>,
     /// Frames whose lower legs were dropped as collapsed.
     collapsed: usize,
 }
 
-/// Likelihood gate -> collapsed frames dropped -> swap correction -> gap filling -> smoothing
-/// (collapsed frames filled after it).
+/// Likelihood gate -> collapsed frames dropped -> swap correction -> the corrections' swaps and
+/// keypoints -> gap filling -> smoothing (collapsed frames filled after it).
 fn clean(
     seq: &PoseSequence,
     post: &PostprocessConfig,
     steps: &Steps,
+    fixes: &Corrections,
     warnings: &mut Vec<String>,
 ) -> Cleaned {
     let fps = seq.fps;
@@ -353,19 +390,25 @@ fn clean(
             "lower-leg keypoints dropped in {collapsed_frames} frames where both legs were drawn on one"
         ));
     }
-    let swapped = steps
+    let mut swapped = steps
         .swap
         .map(|s| s.correct(&mut t))
         .unwrap_or_else(|| vec![false; n]);
+    for i in (0..n).filter(|&i| swapped[i]) {
+        swap::swap_frame(&mut raw, i);
+    }
+    // A person's swaps come after the automatic correction, which therefore cannot undo them;
+    // their frames stop counting as swapped (a confirmed fix, see `apply_swaps`).
+    corrections::apply_swaps(fixes, &mut t, &mut raw, &mut swapped);
     let swapped_frames = swapped.iter().filter(|&&s| s).count();
     if swapped_frames > 0 {
         warnings.push(format!(
             "left/right leg labels corrected in {swapped_frames} frames"
         ));
     }
-    for i in (0..n).filter(|&i| swapped[i]) {
-        swap::swap_frame(&mut raw, i);
-    }
+    // A person's keypoints are in the labels they see in the output, so they come after both
+    // label corrections; before gap filling and smoothing, as if the pose model had given them.
+    corrections::apply_keypoints(fixes, &mut t, &mut raw);
     let gated = t.clone();
 
     let max_gap = post.max_gap(fps);
@@ -546,5 +589,236 @@ mod tests {
             );
         }
         assert_eq!(after.cycles_accepted, before.cycles_accepted);
+    }
+
+    /// Writes `text` as a corrections file in `dir` and returns the config that applies it.
+    fn with_corrections(dir: &std::path::Path, text: &str) -> KinematicsConfig {
+        let p = dir.join("corrections.toml");
+        std::fs::write(&p, text).unwrap();
+        KinematicsConfig {
+            corrections: Some(p),
+            ..Default::default()
+        }
+    }
+
+    /// No smoothing: every cleaned sample of a fully seen frame is the input's own.
+    fn unsmoothed() -> PostprocessConfig {
+        PostprocessConfig {
+            filter: FilterKind::None,
+            ..Default::default()
+        }
+    }
+
+    /// The leg keypoint indices `[left, right]` of each leg part.
+    fn leg_pairs(t: &Tracks) -> Vec<[usize; 2]> {
+        tracks::LEG
+            .iter()
+            .map(|p| {
+                [
+                    t.leg_index(Side::Left, p).unwrap(),
+                    t.leg_index(Side::Right, p).unwrap(),
+                ]
+            })
+            .collect()
+    }
+
+    /// A person's swap comes after the automatic correction, which cannot undo it, and does not
+    /// count against the cycle quality; where the automatic correction had exchanged the labels
+    /// a person's swap gives the model's labels back, and those frames no longer count either.
+    #[test]
+    fn swaps_by_hand_come_last_and_do_not_reject_strides() {
+        let walker = testing::walker(30.0, 180, |i| 100.0 + 13.0 * i as f64);
+        let dir = tempfile::tempdir().unwrap();
+        let kin = with_corrections(dir.path(), "[[swap]]\nfirst = 60\nlast = 67\n");
+        let post = unsmoothed();
+        let r = analyse(&walker.to_sequence(), &post, &kin).unwrap();
+        let f = Tracks::from_sequence(&r.filtered);
+        for [l, rt] in leg_pairs(&walker) {
+            for i in 0..180 {
+                let (a, b) = if (60..=67).contains(&i) {
+                    (rt, l)
+                } else {
+                    (l, rt)
+                };
+                assert_eq!(f.at(a, i), walker.at(l, i), "frame {i}");
+                assert_eq!(f.at(b, i), walker.at(rt, i), "frame {i}");
+            }
+        }
+        assert_eq!(r.swapped_frames, 0);
+        let over: Vec<&CycleQuality> = r
+            .cycle_quality
+            .iter()
+            .filter(|q| q.first_frame <= 67 && 60 <= q.last_frame)
+            .collect();
+        assert!(!over.is_empty());
+        // 8 swapped frames in a 34-frame stride would be over cycle_max_swapped_share (0.1).
+        assert!(
+            over.iter()
+                .all(|q| q.swapped_frames == 0 && !q.reasons.contains(&Reason::Swap)),
+            "{over:?}"
+        );
+        let s = r.corrections.as_ref().unwrap();
+        assert_eq!(
+            (s.swaps, s.swapped_frames, s.path.clone()),
+            (1, 8, dir.path().join("corrections.toml"))
+        );
+        assert_eq!(
+            r.warnings[0],
+            format!(
+                "corrections applied from {}: 1 swap (8 frames)",
+                s.path.display()
+            )
+        );
+
+        // The model exchanged the labels over 60-67: the automatic correction undoes it and the
+        // strides over it are rejected for swaps; a person who says the model was right gets
+        // the model's labels and accepted strides.
+        let mut exchanged = walker.clone();
+        for i in 60..=67 {
+            swap::swap_frame(&mut exchanged, i);
+        }
+        let seq = exchanged.to_sequence();
+        let auto = analyse(&seq, &post, &KinematicsConfig::default()).unwrap();
+        assert_eq!(auto.swapped_frames, 8);
+        assert!(
+            auto.cycle_quality
+                .iter()
+                .any(|q| q.reasons.contains(&Reason::Swap))
+        );
+        let fixed = analyse(&seq, &post, &kin).unwrap();
+        assert_eq!(fixed.swapped_frames, 0);
+        assert!(
+            fixed
+                .cycle_quality
+                .iter()
+                .all(|q| !q.reasons.contains(&Reason::Swap))
+        );
+        let f = Tracks::from_sequence(&fixed.filtered);
+        for [l, rt] in leg_pairs(&walker) {
+            for i in 60..=67 {
+                assert_eq!(
+                    (f.at(l, i), f.at(rt, i)),
+                    (exchanged.at(l, i), exchanged.at(rt, i))
+                );
+            }
+        }
+    }
+
+    /// A keypoint set by hand is in the output's labels, with likelihood 1, before gap filling
+    /// (a gap of the model's is filled around it) and smoothing.
+    #[test]
+    fn keypoints_by_hand_replace_the_models() {
+        let mut walker = testing::walker(30.0, 120, |i| 100.0 + 13.0 * i as f64);
+        let ankle = walker.index("right_ankle").unwrap();
+        for i in 48..=52 {
+            walker.likelihood[ankle][i] = 0.1;
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let kin = with_corrections(
+            dir.path(),
+            "[[keypoint]]\nframe = 50\nname = \"right_ankle\"\nx = 812.5\ny = 601.0\n",
+        );
+        let r = analyse(&walker.to_sequence(), &unsmoothed(), &kin).unwrap();
+        let f = Tracks::from_sequence(&r.filtered);
+        assert_eq!(f.at(ankle, 50), Some((812.5, 601.0)));
+        assert_eq!(f.likelihood[ankle][50], 1.0);
+        // The gated frames either side are filled, now through the person's point.
+        let before = analyse(
+            &walker.to_sequence(),
+            &unsmoothed(),
+            &KinematicsConfig::default(),
+        )
+        .unwrap();
+        let b = Tracks::from_sequence(&before.filtered);
+        assert!(f.at(ankle, 49).is_some() && f.at(ankle, 49) != b.at(ankle, 49));
+        assert_eq!(f.at(ankle, 20), b.at(ankle, 20));
+        assert_eq!(r.corrections.as_ref().unwrap().keypoints, 1);
+    }
+
+    /// Walk 3 s, then stand: events removed, added (also where nobody walks) and excluded
+    /// exactly as written, and strides over excluded frames rejected.
+    #[test]
+    fn events_by_hand_and_excluded_frames() {
+        let pos = |i: usize| 100.0 + 400.0 * i.min(150) as f64 / 30.0;
+        let seq = testing::walker(30.0, 200, pos).to_sequence();
+        let post = PostprocessConfig::default();
+        let before = analyse(&seq, &post, &KinematicsConfig::default()).unwrap();
+        let hs = |r: &KinResult, side: Side| -> Vec<usize> {
+            r.events
+                .iter()
+                .filter(|e| e.side == side && e.event == EventKind::HeelStrike)
+                .map(|e| e.frame)
+                .collect()
+        };
+        let left = hs(&before, Side::Left);
+        assert!(left.len() >= 4, "{:?}", before.events);
+        assert!(before.bouts.iter().all(|b| !b.contains(190)));
+        // Remove the second left heel strike (named 2 frames late), exclude the third one's
+        // frame, add a right toe-off at 190 where she stands.
+        let (second, third) = (left[1], left[2]);
+        let text = format!(
+            "[[event]]\nside = \"left\"\nkind = \"heel_strike\"\nframe = {}\naction = \"remove\"\n\
+             [[event]]\nside = \"right\"\nkind = \"toe_off\"\nframe = 190\naction = \"add\"\n\
+             [[exclude]]\nfirst = {third}\nlast = {third}\n",
+            second + 2
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let kin = with_corrections(dir.path(), &text);
+        let r = analyse(&seq, &post, &kin).unwrap();
+        let mut expect: Vec<Event> = before
+            .events
+            .iter()
+            .copied()
+            .filter(|e| {
+                !(e.side == Side::Left && e.event == EventKind::HeelStrike && e.frame == second)
+                    && e.frame != third
+            })
+            .collect();
+        expect.push(Event {
+            side: Side::Right,
+            event: EventKind::ToeOff,
+            frame: 190,
+        });
+        events::sort(&mut expect);
+        assert_eq!(r.events, expect);
+        // The left strides now run first -> fourth heel strike (too long: no candidate) and
+        // fourth -> fifth; every stride over the excluded frame is rejected for it.
+        for q in &r.cycle_quality {
+            let over = (q.first_frame..=q.last_frame).contains(&third);
+            assert_eq!(q.reasons.contains(&Reason::Excluded), over, "{q:?}");
+        }
+        assert!(
+            r.cycle_quality
+                .iter()
+                .any(|q| q.reasons.contains(&Reason::Excluded))
+        );
+        assert!(
+            !r.cycle_quality
+                .iter()
+                .any(|q| q.side == Side::Left && q.first_frame == second)
+        );
+
+        // A removal that finds nothing stops the analysis, naming the file and the entry.
+        let kin = with_corrections(
+            dir.path(),
+            "[[event]]\nside = \"left\"\nkind = \"toe_off\"\nframe = 195\naction = \"remove\"\n",
+        );
+        let e = analyse(&seq, &post, &kin).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!(
+                "{}: [[event]] #1 (remove left toe_off at frame 195): no left toe_off within 3 frames to remove",
+                dir.path().join("corrections.toml").display()
+            )),
+            "{e}"
+        );
+        // So does an invalid file.
+        let kin = with_corrections(dir.path(), "[[swap]]\nfirst = 150\nlast = 250\n");
+        let e = analyse(&seq, &post, &kin).unwrap_err().to_string();
+        assert!(
+            e.ends_with(
+                "[[swap]] #1 (frames 150-250): frame 250 is outside the run (frames 0-199)"
+            ),
+            "{e}"
+        );
     }
 }

@@ -4,13 +4,15 @@
 //! A stride is judged on the data it was measured from: a stride time far from the subject's
 //! usual one (a missed or extra heel strike), keypoints the model did not give (a long filled
 //! gap), keypoints the model was unsure of, a leg whose segments change length (a wrong or
-//! partly hidden pose), leg labels the swap correction had to exchange, or a stride that does
-//! not lie in one walking bout. Each rejection names its reasons.
+//! partly hidden pose), leg labels the swap correction had to exchange, a stride that does
+//! not lie in one walking bout, or one over frames a person excluded (`[[exclude]]` in
+//! [`crate::corrections`]). Each rejection names its reasons.
 
 use serde::Serialize;
 
 use crate::bouts::{Bout, bout_of};
 use crate::config::{KinematicsConfig, Side};
+use crate::corrections::FrameRange;
 use crate::cycles::Stride;
 use crate::tracks::{LEG, Tracks, dist, median};
 
@@ -30,15 +32,18 @@ pub enum Reason {
     Swap,
     /// Start and end not in the same walking bout.
     CrossesBout,
+    /// Overlaps frames excluded in the corrections (`[[exclude]]`).
+    Excluded,
 }
 
-pub const REASONS: [Reason; 6] = [
+pub const REASONS: [Reason; 7] = [
     Reason::StrideTime,
     Reason::FilledGap,
     Reason::LowLikelihood,
     Reason::SegmentLength,
     Reason::Swap,
     Reason::CrossesBout,
+    Reason::Excluded,
 ];
 
 impl Reason {
@@ -50,6 +55,7 @@ impl Reason {
             Reason::SegmentLength => "segment_length",
             Reason::Swap => "swap",
             Reason::CrossesBout => "crosses_bout",
+            Reason::Excluded => "excluded",
         }
     }
 
@@ -73,6 +79,7 @@ impl Reason {
             ),
             Reason::Swap => "leg labels exchanged by the swap correction".into(),
             Reason::CrossesBout => "not inside one walking bout".into(),
+            Reason::Excluded => "over frames excluded in the corrections".into(),
         }
     }
 }
@@ -129,11 +136,19 @@ pub struct Evidence<'a> {
     pub gated: &'a Tracks,
     /// The model's likelihoods before the gate, per keypoint and frame, labels swap-corrected.
     pub raw_likelihood: &'a [Vec<f64>],
+    /// Frames whose labels the automatic swap correction exchanged (not those a person swapped).
     pub swapped: &'a [bool],
     pub bouts: &'a [Bout],
     /// Whether a stride must lie in one bout (not for events from a file with detected bouts:
     /// the user's events say where the walking is).
     pub enforce_bouts: bool,
+    /// Input frames a person excluded: a stride overlapping one is rejected.
+    pub excluded: &'a [FrameRange],
+}
+
+/// Whether stride `s` overlaps an excluded range.
+fn excluded(ev: &Evidence, s: &Stride) -> bool {
+    crate::corrections::excluded_overlap(ev.excluded, s.start, s.end)
 }
 
 /// The leg's keypoints the model gives (seen in some frame).
@@ -181,12 +196,13 @@ fn longest_gap(g: &Tracks, points: &[usize], range: std::ops::RangeInclusive<usi
 /// The median stride time the deviations are measured from, pooled over both sides: in steady
 /// walking both legs share one stride time, even in asymmetric prosthetic gait (the step times
 /// differ, the strides do not), and pooling doubles the strides the median rests on. Strides
-/// outside a bout do not count where bouts are enforced.
+/// outside a bout do not count where bouts are enforced, nor strides over excluded frames.
 fn median_stride_s(ev: &Evidence, strides: &[Stride], fps: f64) -> f64 {
     let dur = |s: &Stride| (s.end - s.start) as f64 / fps;
     let mut inside: Vec<f64> = strides
         .iter()
         .filter(|s| !ev.enforce_bouts || same_bout(ev.bouts, s).is_some())
+        .filter(|s| !excluded(ev, s))
         .map(dur)
         .collect();
     if inside.is_empty() {
@@ -224,6 +240,9 @@ pub fn assess(ev: &Evidence, strides: &[Stride], kin: &KinematicsConfig) -> Vec<
             let mut q = measure(ev, s, reference, med);
             q.bout = bout;
             q.reasons = verdict(&q, kin, ev.enforce_bouts);
+            if excluded(ev, s) {
+                q.reasons.push(Reason::Excluded);
+            }
             q.accepted = q.reasons.is_empty();
             q
         })

@@ -285,6 +285,12 @@ fn kinematics(
     kin_config
         .frame_size
         .get_or_insert([info.width, info.height]);
+    // A person's corrections saved in the run folder (by `gait review` or by
+    // hand) apply to every rerun into that folder unless the config names a file.
+    let saved = out.join("corrections.toml");
+    if kin_config.corrections.is_none() && saved.is_file() {
+        kin_config.corrections = Some(saved);
+    }
     let kin = gait_kin::analyse(&summary.poses, &config.postprocess, &kin_config)
         .map_err(gait_core::StageError::from)?;
     gait_kin::write_outputs(&kin, out).map_err(gait_core::StageError::from)?;

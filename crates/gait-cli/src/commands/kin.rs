@@ -26,6 +26,9 @@ pub struct Args {
     /// For multi-animal DeepLabCut files: the individual to analyse [default: the first]
     #[arg(long, value_name = "NAME")]
     individual: Option<String>,
+    /// Apply a corrections.toml (swaps, events, excluded frames, keypoints; README, Corrections)
+    #[arg(long, value_name = "FILE")]
+    corrections: Option<PathBuf>,
 }
 
 pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
@@ -35,7 +38,10 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
             args.fps
         )));
     }
-    let config = PipelineConfig::load(args.config.as_deref(), &args.sets)?;
+    let mut config = PipelineConfig::load(args.config.as_deref(), &args.sets)?;
+    if let Some(c) = &args.corrections {
+        config.kinematics.corrections = Some(c.clone());
+    }
     let file = std::fs::File::open(&args.keypoints).map_err(|e| {
         CliError(format!(
             "{}: cannot open ({e}); check the --keypoints path",

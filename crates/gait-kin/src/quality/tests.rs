@@ -11,6 +11,7 @@ struct Case {
     lik: Vec<Vec<f64>>,
     swapped: Vec<bool>,
     bouts: Vec<Bout>,
+    excluded: Vec<FrameRange>,
 }
 
 impl Case {
@@ -22,6 +23,7 @@ impl Case {
             lik: vec![vec![0.9; n]; t.names.len()],
             swapped: vec![false; n],
             bouts: vec![bout(0, 179)],
+            excluded: Vec::new(),
             t,
         }
     }
@@ -34,6 +36,7 @@ impl Case {
             swapped: &self.swapped,
             bouts: &self.bouts,
             enforce_bouts: true,
+            excluded: &self.excluded,
         };
         assess(&ev, strides, kin)
     }
@@ -178,4 +181,58 @@ fn a_stride_across_two_bouts_is_rejected() {
     assert!(!step_ok(&q, &c.bouts, true, 59, 63));
     assert!(step_ok(&q, &c.bouts, true, 160, 175));
     assert!(!step_ok(&q, &c.bouts, true, 170, 185));
+}
+
+#[test]
+fn strides_over_excluded_frames_are_rejected() {
+    let mut c = Case::new();
+    let stride = |start: usize, end: usize| Stride {
+        side: Side::Left,
+        start,
+        end,
+    };
+    // Two strides of 46 frames between two of 34: over all four the median would be 40.
+    let s = [
+        stride(10, 44),
+        stride(44, 90),
+        stride(90, 136),
+        stride(136, 170),
+    ];
+    // 50-52 lies in the second stride only; 136 is the heel strike ending the third and
+    // starting the fourth.
+    c.excluded = vec![
+        FrameRange {
+            first: 50,
+            last: 52,
+        },
+        FrameRange {
+            first: 136,
+            last: 136,
+        },
+    ];
+    let q = c.judge(&s, &KinematicsConfig::default());
+    let reasons: Vec<Vec<Reason>> = q.iter().map(|q| q.reasons.clone()).collect();
+    assert_eq!(
+        reasons,
+        vec![
+            vec![],
+            vec![Reason::StrideTime, Reason::Excluded],
+            vec![Reason::StrideTime, Reason::Excluded],
+            vec![Reason::Excluded]
+        ]
+    );
+    // Excluded strides leave the median stride time alone.
+    assert_eq!(q[0].stride_deviation, 0.0, "{:?}", q[0]);
+    let w = warnings(&q, &KinematicsConfig::default());
+    assert!(
+        w.contains(&"3 of 4 strides rejected (excluded): over frames excluded in the corrections (see cycle_quality.csv)".to_string()),
+        "{w:?}"
+    );
+    c.excluded.clear();
+    let q = c.judge(&s, &KinematicsConfig::default());
+    assert!(
+        (q[0].stride_deviation - 6.0 / 40.0).abs() < 1e-12,
+        "{:?}",
+        q[0]
+    );
 }
