@@ -18,7 +18,9 @@ from PIL import Image
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SRC = ROOT / "crates/gait-pose/tests/fixtures/blazepose"
 OUT = ROOT / "crates/gait-tflite/tests/fixtures"
-NAMES = ["frame_150", "astronaut"]
+# The edge_* frames (tools/blazepose/make_fixtures.py) have the person touching one image border
+# each: the mask must agree there too.
+NAMES = ["frame_150", "astronaut", "edge_bottom_150", "edge_top_120", "edge_left_150", "edge_right_120"]
 
 OUT.mkdir(parents=True, exist_ok=True)
 with mp.solutions.selfie_segmentation.SelfieSegmentation(model_selection=0) as seg:

@@ -21,7 +21,15 @@ fn fixture(name: &str) -> PathBuf {
 fn selfie_mask_matches_mediapipe() {
     let graph = Graph::load(&model()).expect("selfie_segmentation.tflite");
     let net = CandleGraph::new(&graph).expect("compile");
-    for name in ["frame_150", "astronaut"] {
+    // The edge_* frames have the person touching one image border each.
+    for name in [
+        "frame_150",
+        "astronaut",
+        "edge_bottom_150",
+        "edge_top_120",
+        "edge_left_150",
+        "edge_right_120",
+    ] {
         let img = image::open(fixture(&format!("selfie_{name}.png")))
             .unwrap()
             .to_rgb8();

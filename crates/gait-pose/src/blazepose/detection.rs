@@ -68,28 +68,40 @@ pub fn weighted_nms(mut dets: Vec<Detection>, threshold: f32) -> Vec<Detection> 
             .into_iter()
             .partition(|d| iou(&top.bbox, &d.bbox) > threshold);
         dets = rest;
-        let total: f32 = cluster.iter().map(|d| d.score).sum();
-        let mut merged = top.clone();
-        if total > 0.0 {
-            merged.bbox = [0.0; 4];
-            merged.keypoints = [(0.0, 0.0); 4];
-            for d in &cluster {
-                for (m, v) in merged.bbox.iter_mut().zip(d.bbox) {
-                    *m += v * d.score / total;
-                }
-                for (m, v) in merged.keypoints.iter_mut().zip(d.keypoints) {
-                    m.0 += v.0 * d.score / total;
-                    m.1 += v.1 * d.score / total;
-                }
-            }
-        }
         if cluster.is_empty() {
             // Only when the top box has zero area (IoU with itself is 0).
             dets.retain(|d| d != &top);
         }
-        out.push(merged);
+        out.push(weighted_mean(top, &cluster));
     }
     out
+}
+
+/// `top` with the score-weighted mean box and keypoints of `cluster`, in
+/// mediapipe's order (sums of value x score, one division), so the crop
+/// built from the keypoints is the same to the last bit.
+fn weighted_mean(top: Detection, cluster: &[Detection]) -> Detection {
+    let mut total = 0f32;
+    let mut bbox = [0f32; 4];
+    let mut keypoints = [(0f32, 0f32); 4];
+    for d in cluster {
+        total += d.score;
+        for (m, v) in bbox.iter_mut().zip(d.bbox) {
+            *m += v * d.score;
+        }
+        for (m, v) in keypoints.iter_mut().zip(d.keypoints) {
+            m.0 += v.0 * d.score;
+            m.1 += v.1 * d.score;
+        }
+    }
+    if total.is_nan() || total <= 0.0 {
+        return top;
+    }
+    Detection {
+        score: top.score,
+        bbox: bbox.map(|v| v / total),
+        keypoints: keypoints.map(|(x, y)| (x / total, y / total)),
+    }
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use super::names;
 use super::net::{self, Net};
 use super::person;
 use super::roi::Roi;
-use super::warp::{self, Border, PixelRect};
+use super::warp::{self, Border};
 
 const NMS_IOU: f32 = 0.3;
 const HEATMAP_LEN: usize = 64 * 64 * landmarks::ALL;
@@ -59,21 +59,12 @@ impl Blazepose {
 
     /// Person detections in normalised image coordinates, best score first.
     pub fn detect(&mut self, frame: &Frame) -> Result<Vec<Detection>, StageError> {
-        let (w, h) = (frame.width() as f32, frame.height() as f32);
-        let side = w.max(h);
-        let rect = PixelRect {
-            cx: w / 2.0,
-            cy: h / 2.0,
-            w: side,
-            h: side,
-            rotation: 0.0,
+        // No ROI: mediapipe letterboxes the whole image, zeros around it.
+        let Some(crop) = warp::crop_roi(&frame.image, &Roi::WHOLE, DETECTOR_SIZE, Border::Zero)
+        else {
+            return Ok(Vec::new());
         };
-        let crop = warp::crop(&frame.image, rect, DETECTOR_SIZE, Border::Zero);
-        let input: Vec<f32> = crop
-            .iter()
-            .map(|&v| v as f32 * (2.0 / 255.0) - 1.0)
-            .collect();
-        let out = self.detector.run(&input)?;
+        let out = self.detector.run(&to_tensor(&crop, -1.0, 1.0))?;
         let n = self.anchors.len();
         let regressors = find(&out, n * detection::ROW, "regressor")?;
         let scores = find(&out, n, "score")?;
@@ -84,9 +75,9 @@ impl Blazepose {
             self.config.detection_threshold,
         );
         let mut dets = detection::weighted_nms(dets, NMS_IOU);
-        // Undo the letterbox: padding is a fraction of the square side.
-        let (px, py) = ((1.0 - w / side) / 2.0, (1.0 - h / side) / 2.0);
-        let fix = |x: f32, y: f32| ((x - px) / (1.0 - 2.0 * px), (y - py) / (1.0 - 2.0 * py));
+        // Undo the letterbox (DetectionLetterboxRemovalCalculator).
+        let (px, py) = warp::square_padding(frame.width() as f32, frame.height() as f32);
+        let fix = |x: f32, y: f32| ((x - px) / (1.0 - (px + px)), (y - py) / (1.0 - (py + py)));
         for d in &mut dets {
             let (x0, y0) = fix(d.bbox[0], d.bbox[1]);
             let (x1, y1) = fix(d.bbox[2], d.bbox[3]);
@@ -98,33 +89,39 @@ impl Blazepose {
         Ok(dets)
     }
 
-    /// Runs the landmark model on the crop `roi` of `frame`.
-    pub fn landmarks(&mut self, frame: &Frame, roi: &Roi) -> Result<LandmarkResult, StageError> {
-        let (w, h) = (frame.width() as f32, frame.height() as f32);
-        let (mut rw, mut rh) = (roi.w * w, roi.h * h);
-        // mediapipe pads the crop to the tensor's (square) aspect ratio.
-        if 1.0 > rh / rw {
-            rh = rw;
-        } else {
-            rw = rh;
-        }
-        let rect = PixelRect {
-            cx: roi.cx * w,
-            cy: roi.cy * h,
-            w: rw,
-            h: rh,
-            rotation: roi.rotation,
+    /// Runs the landmark model on the crop `roi` of `frame`; `None` when the
+    /// crop is degenerate (zero or non-finite size).
+    pub fn landmarks(
+        &mut self,
+        frame: &Frame,
+        roi: &Roi,
+    ) -> Result<Option<LandmarkResult>, StageError> {
+        let Some(crop) = warp::crop_roi(&frame.image, roi, LANDMARK_SIZE, Border::Replicate) else {
+            return Ok(None);
         };
-        let crop = warp::crop(&frame.image, rect, LANDMARK_SIZE, Border::Replicate);
-        let input: Vec<f32> = crop.iter().map(|&v| v as f32 / 255.0).collect();
-        let out = self.landmarker.run(&input)?;
+        let out = self.landmarker.run(&to_tensor(&crop, 0.0, 1.0))?;
         let raw = find(&out, landmarks::ALL * 5, "landmark")?;
         let heatmap = find(&out, HEATMAP_LEN, "heatmap")?;
         let presence = find(&out, 1, "presence")?[0];
-        Ok(LandmarkResult {
-            landmarks: landmarks::decode(raw, heatmap, roi),
+        Ok(Some(LandmarkResult {
+            landmarks: landmarks::decode(raw, heatmap, roi, frame.width(), frame.height()),
             presence,
-        })
+        }))
+    }
+
+    /// The pose in the crop `roi` = [x_centre, y_centre, width, height,
+    /// rotation] (mediapipe's `NormalizedRect`) of `frame`, skipping the
+    /// detector and leaving the tracking state alone: keypoints as
+    /// [`PoseEstimator::estimate`] gives them, `None` when the crop is
+    /// degenerate or the model finds nobody. Checks the landmark stage on
+    /// exactly mediapipe's crop, free of the detector's float noise.
+    pub fn pose_in(&mut self, frame: &Frame, roi: [f32; 5]) -> Result<Option<Pose>, StageError> {
+        let (w, h) = (frame.width(), frame.height());
+        Ok(self
+            .present(frame, Some(Roi::from_array(roi)))?
+            .map(|r| Pose {
+                keypoints: names::to_keypoints(&r.landmarks, w, h),
+            }))
     }
 
     /// The pose in one frame, updating the tracking state.
@@ -186,7 +183,7 @@ impl Blazepose {
             return Ok(None);
         };
         let r = self.landmarks(frame, &roi)?;
-        Ok((r.presence >= self.config.presence_threshold).then_some(r))
+        Ok(r.filter(|r| r.presence >= self.config.presence_threshold))
     }
 
     /// The pose from an accepted landmark result (or none), and the crop to
@@ -208,6 +205,16 @@ impl Blazepose {
             keypoints: names::to_keypoints(lm, w, h),
         }
     }
+}
+
+/// 8-bit crop -> model input in [`min`, `max`], as mediapipe's
+/// `GetValueRangeTransformation` + `cv::Mat::convertTo`: an f32 scale, then
+/// `v * scale + min` rounded once (OpenCV fuses it; f64 is exact here).
+fn to_tensor(crop: &[u8], min: f32, max: f32) -> Vec<f32> {
+    let scale = ((max - min) / 255.0) as f64;
+    crop.iter()
+        .map(|&v| (v as f64 * scale + min as f64) as f32)
+        .collect()
 }
 
 /// Whether a tracked crop still lies on the subject's box: centres within

@@ -2,6 +2,7 @@
 //! projection back to the image.
 
 use super::roi::Roi;
+use super::warp::square_padding;
 
 /// Input side of the landmark model.
 pub const LANDMARK_SIZE: usize = 256;
@@ -25,9 +26,13 @@ fn sigmoid(v: f32) -> f32 {
 }
 
 /// `raw`: 39 x (x, y, z, visibility, presence) in crop pixels; `heatmap`:
-/// 64 x 64 x 39 logits (HWC). Returns the 39 landmarks in image coordinates.
-pub fn decode(raw: &[f32], heatmap: &[f32], roi: &Roi) -> Vec<Landmark> {
+/// 64 x 64 x 39 logits (HWC), for the crop `roi` of a `width` x `height`
+/// image. Returns the 39 landmarks in image coordinates.
+pub fn decode(raw: &[f32], heatmap: &[f32], roi: &Roi, width: u32, height: u32) -> Vec<Landmark> {
     let s = LANDMARK_SIZE as f32;
+    // The ROI is square in pixels only up to rounding; mediapipe removes the
+    // (last-bit) letterbox that leaves before projecting.
+    let (px, py) = square_padding(roi.w * width as f32, roi.h * height as f32);
     (0..ALL)
         .map(|i| {
             let r = &raw[i * 5..i * 5 + 5];
@@ -35,6 +40,7 @@ pub fn decode(raw: &[f32], heatmap: &[f32], roi: &Roi) -> Vec<Landmark> {
             if let Some((rx, ry)) = refine(heatmap, i, x, y) {
                 (x, y) = (rx, ry);
             }
+            let (x, y) = ((x - px) / (1.0 - (px + px)), (y - py) / (1.0 - (py + py)));
             let (x, y) = roi.project(x, y);
             Landmark {
                 x,
@@ -50,6 +56,10 @@ pub fn decode(raw: &[f32], heatmap: &[f32], roi: &Roi) -> Vec<Landmark> {
 fn refine(heatmap: &[f32], channel: usize, x: f32, y: f32) -> Option<(f32, f32)> {
     let n = HEATMAP as i64;
     let (col, row) = ((x * n as f32) as i64, (y * n as f32) as i64);
+    // Rows past the heatmap are left alone too. Older mediapipe compared
+    // center_col with the height here (so it refined rows 64..68); that was
+    // fixed in July 2023 (9861b3c8a), before 0.10.14, which indeed leaves a
+    // foot at row 65 unrefined where the old check would have refined it.
     if col < 0 || col >= n || row < 0 || row >= n {
         return None;
     }

@@ -10,6 +10,7 @@ mod names;
 mod net;
 mod ort_net;
 mod person;
+mod perspective;
 mod roi;
 mod warp;
 
@@ -22,6 +23,7 @@ pub use crate::person::PersonChoice;
 pub use estimator::Blazepose;
 pub use names::NATIVE;
 pub use net::{DETECTOR_FILE, LANDMARK_FILE};
+pub use warp::Border;
 
 /// Runs one network (`.tflite` file `model`, or its ONNX export for ort) on
 /// one NHWC input; returns its raw outputs flattened, in graph order. For
@@ -32,6 +34,20 @@ pub fn raw_outputs(
     input: &[f32],
 ) -> Result<Vec<Vec<f32>>, StageError> {
     net::load(model, backend, gait_core::Device::Cpu)?.run(input)
+}
+
+/// mediapipe's `ImageToTensorCalculator` (CPU) up to the float conversion:
+/// the `size` x `size` RGB crop (row-major, HWC) of `roi` = [x_centre,
+/// y_centre, width, height, rotation] (a `NormalizedRect`) of `image`, padded
+/// to a square as keep_aspect_ratio does. `None` for a degenerate rectangle.
+/// For checks against mediapipe; the estimator crops the same way.
+pub fn image_to_tensor(
+    image: &image::RgbImage,
+    roi: [f32; 5],
+    size: usize,
+    border: Border,
+) -> Option<Vec<u8>> {
+    warp::crop_roi(image, &roi::Roi::from_array(roi), size, border)
 }
 
 /// Keys of `[pose]` when `kind = "blazepose"`.

@@ -14,11 +14,36 @@ pub struct Roi {
     pub rotation: f32,
 }
 
+/// mediapipe's `NormalizeRadians` into [-pi, pi): f32 in, the arithmetic
+/// in f64 (M_PI), so angles past pi wrap to the same f32 as there.
 fn normalize_angle(a: f32) -> f32 {
-    a - 2.0 * PI * ((a - (-PI)) / (2.0 * PI)).floor()
+    use std::f64::consts::PI as PI64;
+    let a = a as f64;
+    (a - 2.0 * PI64 * ((a - (-PI64)) / (2.0 * PI64)).floor()) as f32
 }
 
 impl Roi {
+    /// The whole image (what mediapipe crops when no ROI is given).
+    pub const WHOLE: Roi = Roi {
+        cx: 0.5,
+        cy: 0.5,
+        w: 1.0,
+        h: 1.0,
+        rotation: 0.0,
+    };
+
+    /// From mediapipe's `NormalizedRect` order: [x_centre, y_centre, width,
+    /// height, rotation].
+    pub fn from_array([cx, cy, w, h, rotation]: [f32; 5]) -> Self {
+        Roi {
+            cx,
+            cy,
+            w,
+            h,
+            rotation,
+        }
+    }
+
     /// The landmark-model crop from a centre point and a scale point (detector
     /// kp0/kp1 or landmarks 33/34), normalised, for an image `width` x `height`:
     /// square of side 2 |p1 - p0| scaled by 1.25, rotated so p0 -> p1 points up.

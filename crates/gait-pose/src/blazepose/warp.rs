@@ -1,8 +1,12 @@
 //! Rotated crops resampled exactly as mediapipe's CPU image-to-tensor step:
-//! OpenCV 4.10 `boxPoints` + `warpPerspective` (INTER_LINEAR, fixed point,
-//! 1/32-pixel grid) on the 8-bit image.
+//! OpenCV `boxPoints` + `getPerspectiveTransform` + `warpPerspective`
+//! (INTER_LINEAR, fixed point, 1/32-pixel grid) on the 8-bit image, byte for
+//! byte (tests/blazepose_imagetotensor.rs).
 
 use image::RgbImage;
+
+use super::perspective::{box_points, degrees, invert, perspective_transform};
+use super::roi::Roi;
 
 /// What lies outside the image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -21,68 +25,147 @@ pub struct PixelRect {
     pub rotation: f32,
 }
 
-/// Resamples `rect` of `img` into a `size` x `size` RGB u8 buffer (row-major, HWC).
-pub fn crop(img: &RgbImage, rect: PixelRect, size: usize, border: Border) -> Vec<u8> {
-    // OpenCV's RotatedRect takes degrees (mediapipe converts in f32) and
-    // boxPoints works in f32; keep both so the grid rounds the same way.
-    let deg = rect.rotation * 180.0 / std::f32::consts::PI;
-    let rad = deg as f64 * std::f64::consts::PI / 180.0;
-    let b = rad.cos() as f32 * 0.5;
-    let a = rad.sin() as f32 * 0.5;
-    let p0 = (
-        rect.cx - a * rect.h - b * rect.w,
-        rect.cy + b * rect.h - a * rect.w,
-    );
-    let p1 = (
-        rect.cx + a * rect.h - b * rect.w,
-        rect.cy - b * rect.h - a * rect.w,
-    );
-    let p2 = (2.0 * rect.cx - p0.0, 2.0 * rect.cy - p0.1);
-    // Destination corners (0, H) <- p0, (0, 0) <- p1, (W, 0) <- p2.
-    let n = size as f64;
-    let (ox, oy) = (p1.0 as f64, p1.1 as f64);
-    let (ux, uy) = ((p2.0 - p1.0) as f64 / n, (p2.1 - p1.1) as f64 / n);
-    let (vx, vy) = ((p0.0 - p1.0) as f64 / n, (p0.1 - p1.1) as f64 / n);
+/// The pixel rectangle mediapipe crops for `roi` of a `width` x `height`
+/// image into a square tensor: `GetRoi` (normalised -> pixels, f32), then
+/// `PadRoi` with keep_aspect_ratio (the short side grows to the long one).
+pub fn roi_rect(roi: &Roi, width: u32, height: u32) -> PixelRect {
+    let (w, h) = (width as f32, height as f32);
+    let (mut rw, mut rh) = (roi.w * w, roi.h * h);
+    if 1.0 > rh / rw {
+        rh = rw;
+    } else {
+        rw = rh;
+    }
+    PixelRect {
+        cx: roi.cx * w,
+        cy: roi.cy * h,
+        w: rw,
+        h: rh,
+        rotation: roi.rotation,
+    }
+}
 
+/// `PadRoi`'s letterbox padding for a `w` x `h` rectangle in a square
+/// tensor: (left = right, top = bottom), fractions of the padded side, in
+/// mediapipe's f32 operation order.
+pub fn square_padding(w: f32, h: f32) -> (f32, f32) {
+    let aspect = h / w;
+    if 1.0 > aspect {
+        (0.0, (1.0 - aspect / 1.0) / 2.0)
+    } else {
+        ((1.0 - 1.0 / aspect) / 2.0, 0.0)
+    }
+}
+
+/// [`crop`] of [`roi_rect`]: mediapipe's `ImageToTensorCalculator` on the CPU
+/// for a square `size` x `size` tensor, before the float conversion.
+pub fn crop_roi(img: &RgbImage, roi: &Roi, size: usize, border: Border) -> Option<Vec<u8>> {
+    crop(img, roi_rect(roi, img.width(), img.height()), size, border)
+}
+
+/// The 1/32-pixel sampling grid: OpenCV's INTER_BITS.
+const PHASES: i64 = 32;
+/// `warpPerspective` computes its map in blocks this many columns wide
+/// (BLOCK_SZ^2 / 16 rows); each block restarts the row sum at its first
+/// column, which changes the last bit of some coordinates.
+const BLOCK_COLS: usize = 64;
+
+/// Resamples `rect` of `img` into a `size` x `size` RGB u8 buffer (row-major,
+/// HWC), as mediapipe's `ImageToTensorOpenCvConverter`: `boxPoints`,
+/// `getPerspectiveTransform` onto the output corners, then `warpPerspective`
+/// with INTER_LINEAR and `border`. `None` for a degenerate rectangle (zero
+/// or non-finite size), where mediapipe fails too.
+pub fn crop(img: &RgbImage, rect: PixelRect, size: usize, border: Border) -> Option<Vec<u8>> {
+    let inverse = inverse_map(rect, size)?;
     let (w, h) = (img.width() as i64, img.height() as i64);
-    let src = img.as_raw();
+    if w == 0 || h == 0 {
+        return None;
+    }
     let mut out = vec![0u8; size * size * 3];
     for y in 0..size {
         for x in 0..size {
-            let sx = ox + ux * x as f64 + vx * y as f64;
-            let sy = oy + uy * x as f64 + vy * y as f64;
-            // cvRound: round half to even, then split into pixel and 1/32 phase.
-            let gx = (sx * 32.0).round_ties_even() as i64;
-            let gy = (sy * 32.0).round_ties_even() as i64;
-            let (ix, iy) = (gx >> 5, gy >> 5);
-            let (fx, fy) = (gx & 31, gy & 31);
-            let wts = [
-                (32 - fx) * (32 - fy) * 32,
-                fx * (32 - fy) * 32,
-                (32 - fx) * fy * 32,
-                fx * fy * 32,
-            ];
-            let taps = [(ix, iy), (ix + 1, iy), (ix, iy + 1), (ix + 1, iy + 1)];
-            let mut acc = [0i64; 3];
-            for (&(tx, ty), &wt) in taps.iter().zip(&wts) {
-                let inside = tx >= 0 && ty >= 0 && tx < w && ty < h;
-                let (tx, ty) = match (inside, border) {
-                    (true, _) => (tx, ty),
-                    (false, Border::Zero) => continue,
-                    (false, Border::Replicate) => (tx.clamp(0, w - 1), ty.clamp(0, h - 1)),
-                };
-                let i = ((ty * w + tx) * 3) as usize;
-                for c in 0..3 {
-                    acc[c] += wt * src[i + c] as i64;
-                }
-            }
+            let (gx, gy) = grid_point(&inverse, x, y);
             let o = (y * size + x) * 3;
-            for c in 0..3 {
-                out[o + c] = ((acc[c] + (1 << 14)) >> 15).clamp(0, 255) as u8;
-            }
+            out[o..o + 3].copy_from_slice(&sample(img, gx, gy, border));
         }
     }
-    out
+    Some(out)
+}
+
+/// The matrix taking output pixels to image points (OpenCV inverts the
+/// forward one, as `warpPerspective` without WARP_INVERSE_MAP does).
+fn inverse_map(rect: PixelRect, size: usize) -> Option<[f64; 9]> {
+    let sane = [rect.cx, rect.cy, rect.w, rect.h, rect.rotation]
+        .iter()
+        .all(|v| v.is_finite());
+    if !sane || rect.w <= 0.0 || rect.h <= 0.0 || size == 0 {
+        return None;
+    }
+    let src = box_points(rect.cx, rect.cy, rect.w, rect.h, degrees(rect.rotation));
+    let n = size as f32;
+    let dst = [(0.0, n), (0.0, 0.0), (n, 0.0), (n, n)];
+    invert(&perspective_transform(&src, &dst)?)
+}
+
+/// Output pixel (x, y) -> image point in 1/32 pixels, with
+/// `WarpPerspectiveInvoker`'s operation order and rounding (cvRound: half to
+/// even; coordinates clamped to the i32 range first).
+fn grid_point(m: &[f64; 9], x: usize, y: usize) -> (i64, i64) {
+    let (bx, x1) = (
+        (x / BLOCK_COLS * BLOCK_COLS) as f64,
+        (x % BLOCK_COLS) as f64,
+    );
+    let y = y as f64;
+    let x0 = m[0] * bx + m[1] * y + m[2];
+    let y0 = m[3] * bx + m[4] * y + m[5];
+    let w0 = m[6] * bx + m[7] * y + m[8];
+    let w = w0 + m[6] * x1;
+    let w = if w != 0.0 { PHASES as f64 / w } else { 0.0 };
+    let round = |v: f64| {
+        // std::max(INT_MIN, std::min(INT_MAX, v)): NaN ends up as INT_MAX.
+        let v = if v < i32::MAX as f64 {
+            v
+        } else {
+            i32::MAX as f64
+        };
+        let v = if i32::MIN as f64 > v {
+            i32::MIN as f64
+        } else {
+            v
+        };
+        v.round_ties_even() as i64
+    };
+    (round((x0 + m[0] * x1) * w), round((y0 + m[3] * x1) * w))
+}
+
+/// Bilinear sample at a 1/32-pixel grid point, fixed point as OpenCV's
+/// `remapBilinear` on 8-bit images (weights sum to 2^15).
+fn sample(img: &RgbImage, gx: i64, gy: i64, border: Border) -> [u8; 3] {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    let (ix, iy) = (gx >> 5, gy >> 5);
+    let (fx, fy) = (gx & (PHASES - 1), gy & (PHASES - 1));
+    let wts = [
+        (32 - fx) * (32 - fy) * 32,
+        fx * (32 - fy) * 32,
+        (32 - fx) * fy * 32,
+        fx * fy * 32,
+    ];
+    let taps = [(ix, iy), (ix + 1, iy), (ix, iy + 1), (ix + 1, iy + 1)];
+    let src = img.as_raw();
+    let mut acc = [0i64; 3];
+    for (&(tx, ty), &wt) in taps.iter().zip(&wts) {
+        let inside = tx >= 0 && ty >= 0 && tx < w && ty < h;
+        let (tx, ty) = match (inside, border) {
+            (true, _) => (tx, ty),
+            (false, Border::Zero) => continue,
+            (false, Border::Replicate) => (tx.clamp(0, w - 1), ty.clamp(0, h - 1)),
+        };
+        let i = ((ty * w + tx) * 3) as usize;
+        for c in 0..3 {
+            acc[c] += wt * src[i + c] as i64;
+        }
+    }
+    acc.map(|v| ((v + (1 << 14)) >> 15).clamp(0, 255) as u8)
 }
 
 #[cfg(test)]
@@ -99,7 +182,7 @@ mod tests {
             h: 4.0,
             rotation: 0.0,
         };
-        let out = crop(&img, rect, 4, Border::Zero);
+        let out = crop(&img, rect, 4, Border::Zero).unwrap();
         for y in 0..4 {
             for x in 0..4 {
                 assert_eq!(out[(y * 4 + x) * 3], (x * 10 + y) as u8);
@@ -117,9 +200,10 @@ mod tests {
             h: 8.0,
             rotation: 0.5,
         };
-        assert_eq!(crop(&img, rect, 8, Border::Zero)[0], 0);
+        assert_eq!(crop(&img, rect, 8, Border::Zero).unwrap()[0], 0);
         assert!(
             crop(&img, rect, 8, Border::Replicate)
+                .unwrap()
                 .iter()
                 .all(|&v| v == 100)
         );
