@@ -48,6 +48,26 @@ fn tool(cmd: &str, args: &[&str]) -> String {
     String::from_utf8_lossy(&out.stdout).to_string()
 }
 
+/// ffprobe's `entries` of the first video stream of `file`, in output format `of`
+/// (`count`: decode every frame so `nb_read_frames` is exact).
+fn ffprobe(file: &str, entries: &str, of: &str, count: bool) -> String {
+    let mut args = vec![
+        "-v",
+        "error",
+        "-select_streams",
+        "v:0",
+        "-show_entries",
+        entries,
+        "-of",
+        of,
+        file,
+    ];
+    if count {
+        args.insert(2, "-count_frames");
+    }
+    tool("ffprobe", &args)
+}
+
 /// Input frames with a row in a DeepLabCut CSV (after its 3 header lines).
 fn csv_frames(path: &Path) -> Vec<usize> {
     std::fs::read_to_string(path)
@@ -62,20 +82,11 @@ fn csv_frames(path: &Path) -> Vec<usize> {
 fn overlay_has_one_frame_per_analysed_frame_and_decodes() {
     let run = sample_run();
     let video = run.join("overlay.mp4");
-    let probe = tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-count_frames",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=nb_read_frames,codec_name,r_frame_rate",
-            "-of",
-            "csv=p=0",
-            video.to_str().unwrap(),
-        ],
+    let probe = ffprobe(
+        video.to_str().unwrap(),
+        "stream=nb_read_frames,codec_name,r_frame_rate",
+        "csv=p=0",
+        true,
     );
     let analysed = csv_frames(&run.join("keypoints.csv")).len();
     let fields: Vec<&str> = probe.trim().split(',').collect();
@@ -387,19 +398,11 @@ fn an_ffmpeg_without_libx264_falls_back_to_mpeg4_with_a_warning() {
         err.contains("warning:") && err.contains("mpeg4") && err.contains("libx264"),
         "{err}"
     );
-    let codec = tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=codec_name",
-            "-of",
-            "csv=p=0",
-            out.join("overlay.mp4").to_str().unwrap(),
-        ],
+    let codec = ffprobe(
+        out.join("overlay.mp4").to_str().unwrap(),
+        "stream=codec_name",
+        "csv=p=0",
+        false,
     );
     assert_eq!(codec.trim(), "mpeg4");
 }
@@ -419,20 +422,11 @@ fn zero_shot_overlay_side_by_side_shows_the_regenerated_frames() {
         "report.overlay_layout=\"side_by_side\"",
     ]));
     let video = out.join("overlay.mp4");
-    let probe = tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-count_frames",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=width,height,nb_read_frames",
-            "-of",
-            "default=nw=1",
-            video.to_str().unwrap(),
-        ],
+    let probe = ffprobe(
+        video.to_str().unwrap(),
+        "stream=width,height,nb_read_frames",
+        "default=nw=1",
+        true,
     );
     assert!(probe.contains("nb_read_frames=10"), "{probe}");
     // Three panels of the 1768x994 input, each halved (the input is wider than 1280 px).
