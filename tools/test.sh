@@ -7,4 +7,6 @@ cargo build -p gait-cli
 target/debug/gait models fetch blazepose
 # ezc3d, the reference C3D reader the export tests check keypoints.c3d with.
 bash tools/export/setup_ezc3d.sh >/dev/null
+# puppeteer-core, which drives Chromium in the `gait review` browser test.
+bash tools/review/setup_puppeteer.sh >/dev/null
 cargo test --workspace

@@ -41,6 +41,8 @@ enum Command {
     Ablate(commands::ablate::Args),
     /// Write an earlier run's results as c3d, OpenSim (.trc/.mot) or OpenPose JSON.
     Export(commands::export::Args),
+    /// Look at a run frame by frame in the browser and save corrections.toml.
+    Review(commands::review::Args),
 }
 
 fn main() -> ExitCode {
@@ -54,6 +56,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => commands::eval::execute(args, &models_dir),
         Command::Models(args) => commands::models::execute(args, &models_dir),
         Command::Export(args) => commands::export::execute(args),
+        Command::Review(args) => commands::review::execute(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

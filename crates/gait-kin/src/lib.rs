@@ -36,6 +36,7 @@ pub mod quality;
 pub mod smooth;
 pub mod spatiotemporal;
 pub mod spline;
+mod steps;
 pub mod swap;
 #[cfg(test)]
 mod testing;
@@ -158,37 +159,35 @@ pub fn analyse(
     post: &PostprocessConfig,
     kin: &KinematicsConfig,
 ) -> Result<KinResult, KinError> {
-    let gate = LikelihoodThreshold(post.likelihood_threshold);
-    let swap = ContinuitySwap::default();
-    let gap: Box<dyn GapFiller> = match post.gap_fill {
-        GapFillKind::CubicSpline => Box::new(spline::CubicSplineFill),
-        GapFillKind::Linear => Box::new(spline::LinearFill),
-        GapFillKind::None => Box::new(spline::NoFill),
+    steps::with_configured(post, kin, |steps| analyse_with(seq, post, kin, steps))
+}
+
+/// [`analyse`] with corrections already in memory (a review tool's, before it saves them):
+/// `path` is the file they are saved to and `sha256` the hash of the bytes saved, for the
+/// summary. The result equals [`analyse`] with `kinematics.corrections` naming that file.
+pub fn analyse_corrected(
+    seq: &PoseSequence,
+    post: &PostprocessConfig,
+    kin: &KinematicsConfig,
+    corrections: &Corrections,
+    path: &std::path::Path,
+    sha256: String,
+) -> Result<KinResult, KinError> {
+    check_input(seq, post, kin)?;
+    corrections.validate_file(seq, path)?;
+    let given = Given {
+        summary: corrections::summary(corrections, path, sha256),
+        corrections: corrections.clone(),
+        path: path.to_path_buf(),
     };
-    let smoother: Box<dyn Smoother> = match post.filter {
-        FilterKind::Butterworth => Box::new(butterworth::Butterworth {
-            order: post.butterworth_order,
-            cutoff_hz: post.cutoff_hz,
-        }),
-        FilterKind::OneEuro => Box::new(one_euro::OneEuro {
-            min_cutoff_hz: post.one_euro_min_cutoff_hz,
-            beta: post.one_euro_beta,
-            d_cutoff_hz: post.one_euro_d_cutoff_hz,
-        }),
-        FilterKind::None => Box::new(smooth::Identity),
-    };
-    let detector = ZeniRefined {
-        min_stride_s: kin.min_stride_s,
-        ..ZeniRefined::default()
-    };
-    let steps = Steps {
-        gate: &gate,
-        swap: post.swap_correction.then_some(&swap as &dyn SwapCorrector),
-        gap_filler: gap.as_ref(),
-        smoother: smoother.as_ref(),
-        events: &detector,
-    };
-    analyse_with(seq, post, kin, &steps)
+    steps::with_configured(post, kin, |steps| run_chain(seq, post, kin, steps, Some(given)))
+}
+
+/// Corrections read and checked, with their file and summary.
+struct Given {
+    corrections: Corrections,
+    path: PathBuf,
+    summary: CorrectionsSummary,
 }
 
 /// [`analyse`] with caller-chosen steps.
@@ -199,19 +198,35 @@ pub fn analyse_with(
     steps: &Steps,
 ) -> Result<KinResult, KinError> {
     check_input(seq, post, kin)?;
-    let fps = seq.fps;
-    let mut warnings = Vec::new();
-    let corr = match &kin.corrections {
+    let given = match &kin.corrections {
         Some(p) => {
             let (c, sha) = corrections::load(p, seq)?;
-            let summary = corrections::summary(&c, p, sha);
-            warnings.push(corrections::warning(&summary));
-            Some((c, p.as_path(), summary))
+            Some(Given {
+                summary: corrections::summary(&c, p, sha),
+                corrections: c,
+                path: p.clone(),
+            })
         }
         None => None,
     };
+    run_chain(seq, post, kin, steps, given)
+}
+
+/// The chain of [`analyse_with`] on checked input and corrections.
+fn run_chain(
+    seq: &PoseSequence,
+    post: &PostprocessConfig,
+    kin: &KinematicsConfig,
+    steps: &Steps,
+    corr: Option<Given>,
+) -> Result<KinResult, KinError> {
+    let fps = seq.fps;
+    let mut warnings = Vec::new();
+    if let Some(g) = &corr {
+        warnings.push(corrections::warning(&g.summary));
+    }
     let no_corrections = Corrections::default();
-    let fixes = corr.as_ref().map_or(&no_corrections, |c| &c.0);
+    let fixes = corr.as_ref().map_or(&no_corrections, |g| &g.corrections);
     let c = clean(seq, post, steps, fixes, &mut warnings);
     let (t, n) = (&c.clean, c.clean.len());
     let dirs = directions(t, &mut warnings);
@@ -242,8 +257,8 @@ pub fn analyse_with(
     if enforce_bouts {
         events.retain(|e| bouts::bout_of(&bouts, e.frame).is_some());
     }
-    if let Some((c, path, _)) = &corr {
-        corrections::apply_events(c, &mut events, path)?;
+    if let Some(g) = &corr {
+        corrections::apply_events(&g.corrections, &mut events, &g.path)?;
     }
     for side in Side::BOTH {
         if !events
@@ -304,7 +319,7 @@ pub fn analyse_with(
         cycles,
         spatiotemporal,
         px_per_cm,
-        corrections: corr.map(|c| c.2),
+        corrections: corr.map(|g| g.summary),
         warnings,
         filtered: t.to_sequence(),
     })

@@ -23,5 +23,6 @@ mod subject;
 pub use config::PipelineConfig;
 pub use error::PipelineError;
 pub use outputs::{OutputOptions, Outputs, write_outputs};
+pub use overlay::regenerated_dir;
 pub use runner::{RunOptions, RunSummary, run};
 pub use selection::{SelectionConfig, SelectionRecord};

@@ -18,9 +18,9 @@ fn failed(e: impl ToString) -> PipelineError {
     }
 }
 
-/// The regenerator's cached images of this run (zero-shot runs), found from
-/// the cache key that run.json records.
-fn regenerated_dir(dir: &Path, config: &PipelineConfig) -> Option<PathBuf> {
+/// The regenerator's cached images of this run (zero-shot runs, one
+/// `{frame:06}.png` each), found from the cache key that run.json records.
+pub fn regenerated_dir(dir: &Path, config: &PipelineConfig) -> Option<PathBuf> {
     let root = crate::plan::cache_root(config, dir)?;
     let text = std::fs::read_to_string(dir.join("run.json")).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;

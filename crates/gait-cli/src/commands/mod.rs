@@ -6,6 +6,7 @@ pub mod eval;
 pub mod export;
 pub mod kin;
 pub mod models;
+pub mod review;
 pub mod run;
 
 use std::path::PathBuf;

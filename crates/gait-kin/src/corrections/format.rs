@@ -32,7 +32,12 @@ impl Corrections {
     /// names the input has, finite coordinates, no entry repeated, no event added in an
     /// excluded range. The message names `corrections.toml` and the entry, on one line.
     pub fn validate(&self, seq: &PoseSequence) -> Result<(), KinError> {
-        check(self, seq).map_err(|m| error(Path::new(DEFAULT_NAME), m))
+        self.validate_file(seq, Path::new(DEFAULT_NAME))
+    }
+
+    /// [`Corrections::validate`], with messages naming `path`.
+    pub fn validate_file(&self, seq: &PoseSequence, path: &Path) -> Result<(), KinError> {
+        check(self, seq).map_err(|m| error(path, m))
     }
 }
 
@@ -56,11 +61,16 @@ pub(crate) fn load(path: &Path, seq: &PoseSequence) -> Result<(Corrections, Stri
     let bytes = read_bytes(path)?;
     let c = parse(&bytes, path)?;
     check(&c, seq).map_err(|m| error(path, m))?;
+    Ok((c, sha256_hex(&bytes)))
+}
+
+/// SHA-256 of `bytes`, lower-case hex (the checksum run.json records for a corrections file).
+pub fn sha256_hex(bytes: &[u8]) -> String {
     let mut sha = String::with_capacity(64);
-    for b in Sha256::digest(&bytes) {
+    for b in Sha256::digest(bytes) {
         write!(sha, "{b:02x}").expect("writing to a String");
     }
-    Ok((c, sha))
+    sha
 }
 
 /// Parses TOML; serde's message is made one line, with the line it is about.

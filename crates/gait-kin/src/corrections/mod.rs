@@ -69,6 +69,7 @@ pub(crate) use apply::{
     apply_events, apply_keypoints, apply_swaps, excluded_overlap, summary, warning,
 };
 pub(crate) use format::load;
+pub use format::sha256_hex;
 
 /// The contents of a `corrections.toml` (see the module docs).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]

@@ -1,0 +1,76 @@
+use std::path::PathBuf;
+
+use gait_review::{ReviewSource, ServeOptions};
+
+use crate::error::{CliError, one_line};
+
+/// `gait review`: a local page to look at a run and save corrections.toml.
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("what").required(true).args(["run_dir", "keypoints"])))]
+pub struct Args {
+    /// A `gait run` output folder
+    #[arg(value_name = "RUN_DIR")]
+    run_dir: Option<PathBuf>,
+    /// Review a keypoints CSV (DeepLabCut layout) instead of a run folder; needs --fps
+    #[arg(long, value_name = "FILE", requires = "fps")]
+    keypoints: Option<PathBuf>,
+    /// The video the keypoints come from [default for a run: the input run.json names]
+    #[arg(long, value_name = "FILE")]
+    video: Option<PathBuf>,
+    /// Frame rate of the keypoints (with --keypoints)
+    #[arg(long, value_name = "N")]
+    fps: Option<f64>,
+    /// Pipeline config whose [postprocess] and [kinematics] apply (with --keypoints) [default: configs/default.toml]
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Where corrections are saved (with --keypoints) [default: corrections.toml beside the keypoints]
+    #[arg(long, value_name = "FILE")]
+    corrections: Option<PathBuf>,
+    /// Port on 127.0.0.1 [default: a free one]
+    #[arg(long, value_name = "N")]
+    port: Option<u16>,
+    /// Open the page in the system browser
+    #[arg(long)]
+    open: bool,
+}
+
+pub fn execute(args: Args) -> Result<(), CliError> {
+    let fail = |e: gait_review::ReviewError| CliError(one_line(&e.to_string()));
+    let src = match (&args.run_dir, &args.keypoints) {
+        (Some(dir), _) => {
+            if args.config.is_some() || args.corrections.is_some() || args.fps.is_some() {
+                return Err(CliError(
+                    "--config, --corrections and --fps go with --keypoints; a run folder has its own (run.json, corrections.toml)".into(),
+                ));
+            }
+            ReviewSource::from_run_dir(dir, args.video.as_deref()).map_err(fail)?
+        }
+        (None, Some(kp)) => {
+            let fps = args.fps.unwrap_or(0.0);
+            if !(fps.is_finite() && fps > 0.0) {
+                return Err(CliError(format!("--fps {fps} must be a positive frame rate")));
+            }
+            ReviewSource::from_keypoints(
+                kp,
+                args.video.as_deref(),
+                fps,
+                args.config.as_deref(),
+                args.corrections.as_deref(),
+            )
+            .map_err(fail)?
+        }
+        (None, None) => {
+            return Err(CliError(
+                "give a run folder (gait review RUN_DIR) or --keypoints FILE --fps N".into(),
+            ));
+        }
+    };
+    if let Err(why) = &src.video {
+        eprintln!("warning: {why}");
+    }
+    let opts = ServeOptions {
+        port: args.port,
+        open: args.open,
+    };
+    gait_review::serve(src, &opts).map_err(fail)
+}

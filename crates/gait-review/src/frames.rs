@@ -1,0 +1,145 @@
+//! The frames the page shows: the input video decoded once, in the background, into JPEG
+//! images held in memory; the regenerated frames read once from the run's cache.
+
+use std::collections::HashMap;
+use std::ops::RangeInclusive;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::Duration;
+
+use gait_pipeline::input::InputInfo;
+use image::codecs::jpeg::JpegEncoder;
+
+/// JPEG quality of the frames sent to the page: keypoints stay placeable to a pixel.
+const JPEG_QUALITY: u8 = 90;
+
+/// How long a request waits for the decoder to reach its frame.
+const WAIT: Duration = Duration::from_secs(60);
+
+#[derive(Default)]
+struct Decoded {
+    jpeg: HashMap<usize, Arc<Vec<u8>>>,
+    finished: bool,
+    error: Option<String>,
+}
+
+/// Original frames by input frame number, decoded once by a background thread.
+#[derive(Clone)]
+pub struct FrameStore {
+    shared: Arc<(Mutex<Decoded>, Condvar)>,
+    frames: RangeInclusive<usize>,
+}
+
+/// A frame could not be had; the message is for the page.
+#[derive(Debug)]
+pub struct NoFrame(pub String);
+
+impl FrameStore {
+    /// Starts decoding `frames` of `video` in the background.
+    pub fn start(video: PathBuf, frames: RangeInclusive<usize>) -> Self {
+        let store = FrameStore {
+            shared: Arc::new((Mutex::new(Decoded::default()), Condvar::new())),
+            frames,
+        };
+        let worker = store.clone();
+        std::thread::spawn(move || {
+            let result = worker.decode(&video);
+            let (lock, cvar) = &*worker.shared;
+            let mut d = lock.lock().unwrap_or_else(|p| p.into_inner());
+            d.finished = true;
+            d.error = result.err();
+            cvar.notify_all();
+        });
+        store
+    }
+
+    fn decode(&self, video: &Path) -> Result<(), String> {
+        let info = InputInfo::open(video).map_err(|e| e.to_string())?;
+        let mut reader = info.frames().map_err(|e| e.to_string())?;
+        while let Some(frame) = reader.next_frame().map_err(|e| e.to_string())? {
+            if frame.index > *self.frames.end() {
+                break;
+            }
+            if frame.index < *self.frames.start() {
+                continue;
+            }
+            let mut jpeg = Vec::new();
+            JpegEncoder::new_with_quality(&mut jpeg, JPEG_QUALITY)
+                .encode_image(&frame.image)
+                .map_err(|e| format!("frame {}: {e}", frame.index))?;
+            let (lock, cvar) = &*self.shared;
+            let mut d = lock.lock().unwrap_or_else(|p| p.into_inner());
+            d.jpeg.insert(frame.index, Arc::new(jpeg));
+            cvar.notify_all();
+        }
+        Ok(())
+    }
+
+    /// The JPEG of input frame `n`, waiting for the decoder to reach it.
+    pub fn get(&self, n: usize) -> Result<Arc<Vec<u8>>, NoFrame> {
+        if !self.frames.contains(&n) {
+            return Err(NoFrame(format!(
+                "frame {n} is outside the run (frames {}-{})",
+                self.frames.start(),
+                self.frames.end()
+            )));
+        }
+        let (lock, cvar) = &*self.shared;
+        let d = lock.lock().unwrap_or_else(|p| p.into_inner());
+        let (d, _) = cvar
+            .wait_timeout_while(d, WAIT, |d| !d.finished && !d.jpeg.contains_key(&n))
+            .unwrap_or_else(|p| p.into_inner());
+        if let Some(j) = d.jpeg.get(&n) {
+            return Ok(j.clone());
+        }
+        Err(NoFrame(match (&d.error, d.finished) {
+            (Some(e), _) => format!("the video could not be decoded: {e}"),
+            (None, true) => format!("the video has no frame {n}"),
+            (None, false) => format!("frame {n} is still being decoded; try again"),
+        }))
+    }
+}
+
+/// Regenerated frames read from the run's cache folder once, then kept.
+#[derive(Clone)]
+pub struct RegeneratedStore {
+    dir: PathBuf,
+    cache: Arc<Mutex<HashMap<usize, Arc<Vec<u8>>>>>,
+}
+
+impl RegeneratedStore {
+    pub fn new(dir: PathBuf) -> Self {
+        RegeneratedStore {
+            dir,
+            cache: Arc::default(),
+        }
+    }
+
+    /// The PNG of input frame `n`, when the regenerator made one (frames whose original pose was
+    /// kept have none).
+    pub fn get(&self, n: usize) -> Option<Arc<Vec<u8>>> {
+        let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(b) = cache.get(&n) {
+            return Some(b.clone());
+        }
+        // The name is built from a number only: no path from the request reaches the disk.
+        let bytes = Arc::new(std::fs::read(self.dir.join(format!("{n:06}.png"))).ok()?);
+        cache.insert(n, bytes.clone());
+        Some(bytes)
+    }
+
+    /// Frame numbers with a regenerated image.
+    pub fn frames(&self) -> Vec<usize> {
+        let Ok(entries) = std::fs::read_dir(&self.dir) else {
+            return Vec::new();
+        };
+        let mut v: Vec<usize> = entries
+            .filter_map(|e| {
+                let name = e.ok()?.file_name().into_string().ok()?;
+                name.strip_suffix(".png")?.parse().ok()
+            })
+            .collect();
+        v.sort_unstable();
+        v
+    }
+}

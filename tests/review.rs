@@ -1,0 +1,363 @@
+//! `gait review` end to end, on a real run of the sample video: the page driven in Debian's
+//! headless Chromium over the DevTools protocol (tests/review/browser.cjs with puppeteer-core,
+//! installed by tools/review/setup_puppeteer.sh), the server's security, and its bad input.
+//! What the page saved and shows must equal what `gait kin --corrections` computes.
+
+mod common;
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::OnceLock;
+
+use common::{fails_with, gait, read_json, run_ok, sample_video};
+
+/// One run of frames 40-200 of the sample, shared by the tests of this file.
+fn sample_run() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap().keep().join("run");
+        run_ok(&mut common::sample_run(&dir, 40, 200));
+        dir
+    })
+}
+
+/// A copy of the run's files (not its cache), so that each test has its own corrections.toml.
+fn copy_run(to: &Path) -> PathBuf {
+    std::fs::create_dir_all(to).unwrap();
+    for f in ["run.json", "keypoints.csv"] {
+        std::fs::copy(sample_run().join(f), to.join(f)).unwrap();
+    }
+    to.to_path_buf()
+}
+
+/// `gait review ...` running on a free port; killed when dropped.
+struct Server {
+    child: Child,
+    url: String,
+}
+
+impl Server {
+    fn start(args: &[&std::ffi::OsStr]) -> Server {
+        let mut child = gait()
+            .arg("review")
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("gait review starts");
+        let mut line = String::new();
+        BufReader::new(child.stdout.as_mut().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let url = line.trim().to_string();
+        assert!(url.starts_with("http://127.0.0.1:"), "printed {url:?}");
+        Server { child, url }
+    }
+
+    fn token(&self) -> &str {
+        self.url.split("token=").nth(1).unwrap()
+    }
+
+    fn addr(&self) -> &str {
+        self.url
+            .trim_start_matches("http://")
+            .split('/')
+            .next()
+            .unwrap()
+    }
+
+    /// A plain HTTP/1.1 request; returns the status and the body.
+    fn request(&self, method: &str, target: &str, body: &str) -> (u16, String) {
+        let mut s = TcpStream::connect(self.addr()).unwrap();
+        write!(
+            s,
+            "{method} {target} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
+            self.addr(),
+            body.len()
+        )
+        .unwrap();
+        let mut reply = Vec::new();
+        s.read_to_end(&mut reply).unwrap();
+        let reply = String::from_utf8_lossy(&reply).to_string();
+        let status = reply.split(' ').nth(1).unwrap().parse().unwrap();
+        let body = reply.split("\r\n\r\n").nth(1).unwrap_or("").to_string();
+        (status, body)
+    }
+
+    fn get(&self, path: &str) -> (u16, String) {
+        let sep = if path.contains('?') { '&' } else { '?' };
+        self.request("GET", &format!("{path}{sep}token={}", self.token()), "")
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn node_modules() -> String {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let out = Command::new("bash")
+        .arg(root.join("tools/review/setup_puppeteer.sh"))
+        .output()
+        .expect("bash runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap().trim().to_string()
+}
+
+/// angles.csv as `column -> cells` (cells as written: 6 decimals, empty when undefined).
+fn angles_csv(path: &Path) -> Vec<(String, Vec<String>)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    header
+        .iter()
+        .enumerate()
+        .map(|(c, h)| (h.to_string(), rows.iter().map(|r| r[c].to_string()).collect()))
+        .collect()
+}
+
+#[test]
+fn the_page_saves_corrections_that_gait_kin_reproduces() {
+    let work = tempfile::tempdir().unwrap();
+    let run = copy_run(&work.path().join("run"));
+    let server = Server::start(&[run.as_os_str()]);
+    let plan = serde_json::json!({
+        "step_to": 90,
+        "frames_to_time": (90..111).collect::<Vec<_>>(),
+        "swap": [120, 131],
+        "event": { "frame": 60, "button": "#add-rhs", "expect": "right,heel_strike,60" },
+        "drag": { "frame": 100, "name": "right_ankle", "dx": 14, "dy": -9 },
+        "bad_swap": [125, 140],
+    });
+    let shots = work.path().join("browser");
+    std::fs::create_dir_all(&shots).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/review/browser.cjs");
+    let mut node = Command::new("node");
+    node.arg(script)
+        .arg(&server.url)
+        .arg(&shots)
+        .arg(plan.to_string())
+        .env("NODE_PATH", node_modules());
+    if let Some(b) = gait_eval::pdf::find_chromium() {
+        node.env("CHROMIUM", b);
+    }
+    let out = node.output().expect("node runs");
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    drop(server);
+    let page = read_json(&shots.join("result.json"));
+    eprintln!(
+        "review timings (not asserted): recompute median {:.0} ms per change {:?} (server {:?}); cached frame median {:.1} ms, first request {:.1} ms",
+        page["recompute_ms_median"].as_f64().unwrap(),
+        page["timings"]["recompute_ms"],
+        page["timings"]["server_ms"],
+        page["frame_ms_median"].as_f64().unwrap(),
+        page["timings"]["frame_ms"][0].as_f64().unwrap(),
+    );
+
+    // What was saved is what the page shows after the reload: the swap, the event and the
+    // dragged keypoint.
+    let saved = gait_kin::Corrections::read(&run.join("corrections.toml")).unwrap();
+    let shown: gait_kin::Corrections =
+        serde_json::from_value(page["corrections"].clone()).unwrap();
+    assert_eq!(saved, shown);
+    assert_eq!(saved.swap.len(), 1);
+    assert_eq!((saved.swap[0].first, saved.swap[0].last), (120, 131));
+    assert_eq!(saved.event.len(), 1);
+    assert_eq!(saved.keypoint.len(), 1);
+    assert_eq!(
+        (saved.keypoint[0].frame, saved.keypoint[0].name.as_str()),
+        (100, "right_ankle")
+    );
+
+    // `gait kin --corrections` on the same keypoints and file gives the page's angles and events.
+    let kin = work.path().join("kin");
+    run_ok(
+        gait()
+            .args(["kin", "--fps", "30", "--keypoints"])
+            .arg(run.join("keypoints.csv"))
+            .arg("--config")
+            .arg(run.join("run.json"))
+            .arg("--corrections")
+            .arg(run.join("corrections.toml"))
+            .arg("--out")
+            .arg(&kin)
+            .args(["--set", "kinematics.frame_size=[1768, 994]"]),
+    );
+    let columns = angles_csv(&kin.join("angles.csv"));
+    let first = page["first_frame"].as_u64().unwrap() as usize;
+    let frames: Vec<usize> = columns[0].1.iter().map(|f| f.parse().unwrap()).collect();
+    assert_eq!(frames[0], first);
+    let mut compared = 0;
+    for (name, cells) in &columns[2..] {
+        let series = page["angles"][name].as_array().unwrap();
+        assert_eq!(series.len(), cells.len(), "{name}");
+        for (i, (v, cell)) in series.iter().zip(cells).enumerate() {
+            let shown = v.as_f64().map_or(String::new(), |v| format!("{v:.6}"));
+            assert_eq!(&shown, cell, "{name} at frame {}", first + i);
+            compared += usize::from(!cell.is_empty());
+        }
+    }
+    assert!(compared > 500, "only {compared} angle values to compare");
+    let events: Vec<String> = std::fs::read_to_string(kin.join("events.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').take(3).collect::<Vec<_>>().join(","))
+        .collect();
+    let shown: Vec<String> = page["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| format!("{},{},{}", e["side"].as_str().unwrap(), e["event"].as_str().unwrap(), e["frame"]))
+        .collect();
+    assert_eq!(shown, events);
+    assert!(events.contains(&"right,heel_strike,60".to_string()));
+}
+
+#[test]
+fn only_the_token_holder_gets_anything_and_only_the_page_frames_and_data() {
+    let work = tempfile::tempdir().unwrap();
+    let run = copy_run(&work.path().join("run"));
+    let server = Server::start(&[run.as_os_str()]);
+    for target in ["/", "/api/run", "/api/frame/50", "/?token=0123"] {
+        let (status, _) = server.request("GET", target, "");
+        assert_eq!(status, 403, "{target}");
+    }
+    let (status, _) = server.request("POST", "/api/corrections", "{}");
+    assert_eq!(status, 403);
+    assert!(!run.join("corrections.toml").exists());
+    assert_eq!(server.get("/").0, 200);
+    assert_eq!(server.get("/api/frame/50").0, 200);
+    for target in [
+        "/run.json",
+        "/keypoints.csv",
+        "/api/frame/..%2Frun.json",
+        "/api/frame/../../run.json",
+        "/api/frame/5000",
+        "/api/frame/50?kind=../run.json",
+        "/api/frame/50?kind=regenerated",
+    ] {
+        let (status, body) = server.get(target);
+        assert!(status >= 400, "{target} gave {status}: {body}");
+        assert!(!body.contains("\"config\""), "{target}: {body}");
+    }
+    // A bad edit is refused with the entry named, and nothing is written.
+    let (status, body) = server.request(
+        "POST",
+        &format!("/api/corrections?token={}", server.token()),
+        r#"{"swap":[{"first":120,"last":131},{"first":125,"last":140}]}"#,
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("[[swap]] #2") && body.contains("overlaps"), "{body}");
+    let (status, body) = server.request(
+        "POST",
+        &format!("/api/corrections?token={}", server.token()),
+        r#"{"swap":[{"first":120,"last":131}],"colour":"red"}"#,
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("colour"), "{body}");
+    assert!(!run.join("corrections.toml").exists());
+    let files: Vec<String> = std::fs::read_dir(&run)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    assert_eq!(files.len(), 2, "{files:?}");
+}
+
+#[test]
+fn a_run_without_its_video_shows_the_plots_and_says_why() {
+    let work = tempfile::tempdir().unwrap();
+    let run = copy_run(&work.path().join("run"));
+    let manifest = run.join("run.json");
+    let mut v = read_json(&manifest);
+    v["input"]["path"] = serde_json::json!(work.path().join("moved.mp4"));
+    std::fs::write(&manifest, v.to_string()).unwrap();
+    let server = Server::start(&[run.as_os_str()]);
+    let (status, body) = server.get("/api/run");
+    assert_eq!(status, 200);
+    let data: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let why = data["no_video"].as_str().unwrap();
+    assert!(why.contains("moved.mp4") && why.contains("--video"), "{why}");
+    let (status, body) = server.get("/api/frame/50");
+    assert_eq!(status, 404);
+    assert!(body.contains("moved.mp4"), "{body}");
+    assert_eq!(server.get("/api/analysis").0, 200);
+    // --video gives it back.
+    drop(server);
+    let video = sample_video();
+    let server = Server::start(&[run.as_os_str(), "--video".as_ref(), video.as_os_str()]);
+    assert_eq!(server.get("/api/frame/50").0, 200);
+}
+
+#[test]
+fn keypoints_and_a_video_without_a_run_folder() {
+    let work = tempfile::tempdir().unwrap();
+    let keypoints = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/data/sample-subject/keypoints.csv");
+    let file = work.path().join("fixes.toml");
+    let video = sample_video();
+    let server = Server::start(&[
+        "--keypoints".as_ref(),
+        keypoints.as_os_str(),
+        "--video".as_ref(),
+        video.as_os_str(),
+        "--fps".as_ref(),
+        "30".as_ref(),
+        "--corrections".as_ref(),
+        file.as_os_str(),
+    ]);
+    let (status, body) = server.get("/api/run");
+    assert_eq!(status, 200);
+    let data: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert!(data["no_video"].is_null(), "{body}");
+    assert_eq!(data["frame_size"], serde_json::json!([1768, 994]));
+    let (status, body) = server.request(
+        "POST",
+        &format!("/api/corrections?token={}", server.token()),
+        r#"{"event":[{"side":"right","kind":"heel_strike","frame":60,"action":"add"}]}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let saved = gait_kin::Corrections::read(&file).unwrap();
+    assert_eq!(saved.event.len(), 1);
+    assert_eq!(server.get("/api/frame/60").0, 200);
+}
+
+#[test]
+fn bad_input_is_one_line() {
+    let work = tempfile::tempdir().unwrap();
+    let run = copy_run(&work.path().join("run"));
+    std::fs::write(
+        run.join("corrections.toml"),
+        "[[swap]]\nfirst = 120\nlast = 131\n[[swap]]\nfirst = 125\nlast = 140\n",
+    )
+    .unwrap();
+    fails_with(
+        gait().arg("review").arg(&run),
+        &["corrections.toml", "[[swap]] #2", "overlaps [[swap]] #1"],
+    );
+    std::fs::write(run.join("corrections.toml"), "[[swapp]]\nfirst = 1\n").unwrap();
+    fails_with(gait().arg("review").arg(&run), &["corrections.toml", "swapp"]);
+    fails_with(
+        gait().arg("review").arg(work.path().join("nothing")),
+        &["no such folder"],
+    );
+    fails_with(
+        gait().arg("review").arg(work.path()),
+        &["run.json", "gait run"],
+    );
+}
