@@ -180,7 +180,9 @@ pub fn analyse_corrected(
         corrections: corrections.clone(),
         path: path.to_path_buf(),
     };
-    steps::with_configured(post, kin, |steps| run_chain(seq, post, kin, steps, Some(given)))
+    steps::with_configured(post, kin, |steps| {
+        run_chain(seq, post, kin, steps, Some(given))
+    })
 }
 
 /// Corrections read and checked, with their file and summary.

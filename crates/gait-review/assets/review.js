@@ -184,11 +184,16 @@
     g.fillStyle = dimmed ? '#ffbf47' : '#fff';
     const label = `frame ${S.frame}` + (frameKind() === 'regenerated' ? ' (regenerated)' : '') +
       (dimmed ? ' - outside the walking bouts' : '');
-    g.fillText(label, 12, 26);
-    for (const e of eventsAt(S.frame)) {
-      g.fillStyle = COLOUR[e.side];
-      g.fillText(`${e.side === 'left' ? 'L' : 'R'} ${e.event.replace('_', ' ')}`, 12, 50);
-    }
+    const lines = [[label, g.fillStyle]].concat(eventsAt(S.frame).map((e) =>
+      [`${e.side === 'left' ? 'L' : 'R'} ${e.event.replace('_', ' ')}`, COLOUR[e.side]]));
+    const width = Math.max(...lines.map(([t]) => g.measureText(t).width));
+    g.fillStyle = 'rgba(0,0,0,0.6)';
+    g.fillRect(6, 6, width + 14, 24 * lines.length + 6);
+    lines.forEach(([t, colour], k) => {
+      g.fillStyle = k === 0 ? colour : '#fff';
+      if (k > 0) { g.fillStyle = colour; g.fillRect(10, 14 + 24 * k, 8, 8); g.fillStyle = '#fff'; }
+      g.fillText(t, k === 0 ? 12 : 24, 26 + 24 * k);
+    });
     S.drawn = S.frame;
   }
 

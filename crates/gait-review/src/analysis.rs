@@ -37,7 +37,11 @@ impl AnalysisView {
     fn new(r: KinResult, corrections: &Corrections, seconds: f64) -> Self {
         let mut angles = BTreeMap::new();
         for (side, leg) in [("left", &r.angles.left), ("right", &r.angles.right)] {
-            for (joint, v) in [("hip", &leg.hip), ("knee", &leg.knee), ("ankle", &leg.ankle)] {
+            for (joint, v) in [
+                ("hip", &leg.hip),
+                ("knee", &leg.knee),
+                ("ankle", &leg.ankle),
+            ] {
                 angles.insert(format!("{side}_{joint}"), v.clone());
             }
         }
@@ -79,6 +83,7 @@ pub fn toml_bytes(c: &Corrections) -> Vec<u8> {
 pub fn recompute(src: &ReviewSource, c: &Corrections) -> Result<AnalysisView, gait_kin::KinError> {
     let t = Instant::now();
     let sha = gait_kin::corrections::sha256_hex(&toml_bytes(c));
-    let r = gait_kin::analyse_corrected(&src.seq, &src.post, &src.kin, c, &src.corrections_path, sha)?;
+    let r =
+        gait_kin::analyse_corrected(&src.seq, &src.post, &src.kin, c, &src.corrections_path, sha)?;
     Ok(AnalysisView::new(r, c, t.elapsed().as_secs_f64()))
 }

@@ -7,11 +7,15 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::Duration;
 
+use gait_core::Frame;
 use gait_pipeline::input::InputInfo;
-use image::codecs::jpeg::JpegEncoder;
+use jpeg_encoder::{ColorType, Encoder, SamplingFactor};
 
 /// JPEG quality of the frames sent to the page: keypoints stay placeable to a pixel.
-const JPEG_QUALITY: u8 = 90;
+const JPEG_QUALITY: u8 = 85;
+
+/// Decoded frames waiting for an encoder (bounds the memory of raw frames).
+const QUEUE: usize = 4;
 
 /// How long a request waits for the decoder to reach its frame.
 const WAIT: Duration = Duration::from_secs(60);
@@ -53,26 +57,60 @@ impl FrameStore {
         store
     }
 
+    /// Decodes in this thread (the pipeline's reader, so frame numbers are the run's) and
+    /// encodes on the other cores.
     fn decode(&self, video: &Path) -> Result<(), String> {
         let info = InputInfo::open(video).map_err(|e| e.to_string())?;
         let mut reader = info.frames().map_err(|e| e.to_string())?;
-        while let Some(frame) = reader.next_frame().map_err(|e| e.to_string())? {
-            if frame.index > *self.frames.end() {
-                break;
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Frame>(QUEUE);
+        let rx = Arc::new(Mutex::new(rx));
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        let encoders: Vec<_> = (0..cores.saturating_sub(1).max(1))
+            .map(|_| {
+                let (rx, store) = (rx.clone(), self.clone());
+                std::thread::spawn(move || store.encode_from(&rx))
+            })
+            .collect();
+        let mut result = Ok(());
+        loop {
+            match reader.next_frame() {
+                Ok(Some(f)) if f.index > *self.frames.end() => break,
+                Ok(Some(f)) if f.index < *self.frames.start() => continue,
+                Ok(Some(f)) => {
+                    if tx.send(f).is_err() {
+                        break;
+                    }
+                }
+                Ok(None) => break,
+                Err(e) => {
+                    result = Err(e.to_string());
+                    break;
+                }
             }
-            if frame.index < *self.frames.start() {
-                continue;
+        }
+        drop(tx);
+        for e in encoders {
+            match e.join() {
+                Ok(Err(m)) => result = result.and(Err(m)),
+                Err(_) => result = result.and(Err("a frame encoder stopped".into())),
+                Ok(Ok(())) => {}
             }
-            let mut jpeg = Vec::new();
-            JpegEncoder::new_with_quality(&mut jpeg, JPEG_QUALITY)
-                .encode_image(&frame.image)
-                .map_err(|e| format!("frame {}: {e}", frame.index))?;
+        }
+        result
+    }
+
+    fn encode_from(&self, rx: &Mutex<std::sync::mpsc::Receiver<Frame>>) -> Result<(), String> {
+        loop {
+            let next = rx.lock().unwrap_or_else(|p| p.into_inner()).recv();
+            let Ok(frame) = next else {
+                return Ok(());
+            };
+            let jpeg = encode(&frame).map_err(|e| format!("frame {}: {e}", frame.index))?;
             let (lock, cvar) = &*self.shared;
             let mut d = lock.lock().unwrap_or_else(|p| p.into_inner());
             d.jpeg.insert(frame.index, Arc::new(jpeg));
             cvar.notify_all();
         }
-        Ok(())
     }
 
     /// The JPEG of input frame `n`, waiting for the decoder to reach it.
@@ -98,6 +136,19 @@ impl FrameStore {
             (None, false) => format!("frame {n} is still being decoded; try again"),
         }))
     }
+}
+
+fn encode(frame: &Frame) -> Result<Vec<u8>, String> {
+    let (w, h) = frame.image.dimensions();
+    let (Ok(w16), Ok(h16)) = (u16::try_from(w), u16::try_from(h)) else {
+        return Err(format!("{w}x{h} is larger than a JPEG can hold (65535)"));
+    };
+    let mut jpeg = Vec::new();
+    let mut e = Encoder::new(&mut jpeg, JPEG_QUALITY);
+    e.set_sampling_factor(SamplingFactor::F_2_2);
+    e.encode(frame.image.as_raw(), w16, h16, ColorType::Rgb)
+        .map_err(|e| e.to_string())?;
+    Ok(jpeg)
 }
 
 /// Regenerated frames read from the run's cache folder once, then kept.

@@ -50,7 +50,10 @@ pub fn serve(src: ReviewSource, opts: &ServeOptions) -> Result<(), ReviewError> 
         _ => None,
     };
     let regenerated = src.regenerated.clone().map(frames::RegeneratedStore::new);
-    let run_json = run_view::json(&src, regenerated.as_ref().map_or(Vec::new(), |r| r.frames()));
+    let run_json = run_view::json(
+        &src,
+        regenerated.as_ref().map_or(Vec::new(), |r| r.frames()),
+    );
     let app = Arc::new(server::App {
         token: token()?,
         src: Arc::new(src),
@@ -69,7 +72,9 @@ pub fn serve(src: ReviewSource, opts: &ServeOptions) -> Result<(), ReviewError> 
     runtime.block_on(async {
         let port = opts.port.unwrap_or(0);
         let listener = server::bind(port).await.map_err(|e| ReviewError::Io {
-            context: format!("listening on 127.0.0.1:{port} (is the port in use? try another --port)"),
+            context: format!(
+                "listening on 127.0.0.1:{port} (is the port in use? try another --port)"
+            ),
             source: e,
         })?;
         let addr = listener.local_addr().map_err(|e| ReviewError::Io {
@@ -79,7 +84,10 @@ pub fn serve(src: ReviewSource, opts: &ServeOptions) -> Result<(), ReviewError> 
         let url = format!("http://{addr}/?token={}", app.token);
         println!("{url}");
         let _ = std::io::stdout().flush();
-        eprintln!("review of {}: open the URL above; Ctrl-C stops", app.src.title);
+        eprintln!(
+            "review of {}: open the URL above; Ctrl-C stops",
+            app.src.title
+        );
         if opts.open {
             open_browser(&url);
         }
@@ -98,9 +106,17 @@ pub fn serve(src: ReviewSource, opts: &ServeOptions) -> Result<(), ReviewError> 
 /// The desktop's opener (`$BROWSER`, else xdg-open / open); a failure is only a warning, since
 /// the URL is printed anyway.
 fn open_browser(url: &str) {
-    let opener = std::env::var("BROWSER").ok().filter(|b| !b.is_empty()).unwrap_or_else(|| {
-        if cfg!(target_os = "macos") { "open" } else { "xdg-open" }.to_string()
-    });
+    let opener = std::env::var("BROWSER")
+        .ok()
+        .filter(|b| !b.is_empty())
+        .unwrap_or_else(|| {
+            if cfg!(target_os = "macos") {
+                "open"
+            } else {
+                "xdg-open"
+            }
+            .to_string()
+        });
     if let Err(e) = std::process::Command::new(&opener)
         .arg(url)
         .stdout(std::process::Stdio::null())

@@ -52,7 +52,11 @@ pub(crate) async fn bind(port: u16) -> std::io::Result<tokio::net::TcpListener> 
 
 /// Compares in time independent of where the strings differ.
 fn same(a: &str, b: &str) -> bool {
-    a.len() == b.len() && a.bytes().zip(b.bytes()).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+    a.len() == b.len()
+        && a.bytes()
+            .zip(b.bytes())
+            .fold(0u8, |acc, (x, y)| acc | (x ^ y))
+            == 0
 }
 
 async fn require_token(State(app): State<Shared>, req: Request, next: Next) -> Response {
@@ -87,7 +91,7 @@ async fn index() -> Response {
             // Everything the page needs is in it: nothing may be loaded from elsewhere.
             (
                 header::CONTENT_SECURITY_POLICY,
-                "default-src 'self'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src 'self' blob:; connect-src 'self'",
+                "default-src 'self'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src 'self' blob: data:; connect-src 'self'",
             ),
         ],
         page::html(),
@@ -133,7 +137,11 @@ async fn save_corrections(State(app): State<Shared>, body: Bytes) -> Response {
             axum::Json(&*current).into_response()
         }
         Ok(Err(e)) => {
-            let msg = e.to_string().split_whitespace().collect::<Vec<_>>().join(" ");
+            let msg = e
+                .to_string()
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ");
             error(StatusCode::BAD_REQUEST, &msg)
         }
         Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()),
@@ -175,7 +183,10 @@ async fn frame(
         }
         "regenerated" => match app.regenerated.as_ref().and_then(|r| r.get(n)) {
             Some(bytes) => image("image/png", bytes),
-            None => error(StatusCode::NOT_FOUND, &format!("no regenerated image of frame {n}")),
+            None => error(
+                StatusCode::NOT_FOUND,
+                &format!("no regenerated image of frame {n}"),
+            ),
         },
         other => error(
             StatusCode::BAD_REQUEST,

@@ -38,17 +38,23 @@ pub struct ReviewSource {
 
 fn read_json(path: &Path) -> Result<Value, ReviewError> {
     let text = std::fs::read_to_string(path).map_err(|e| {
-        ReviewError::run(path, format!("cannot read ({e}); is this a `gait run` folder?"))
+        ReviewError::run(
+            path,
+            format!("cannot read ({e}); is this a `gait run` folder?"),
+        )
     })?;
-    serde_json::from_str(&text)
-        .map_err(|e| ReviewError::run(path, format!("not valid JSON ({e})")))
+    serde_json::from_str(&text).map_err(|e| ReviewError::run(path, format!("not valid JSON ({e})")))
 }
 
 fn read_keypoints(path: &Path, fps: f64) -> Result<PoseSequence, ReviewError> {
     let file = std::fs::File::open(path)
         .map_err(|e| ReviewError::run(path, format!("cannot open ({e})")))?;
     gait_core::dlc::read(std::io::BufReader::new(file), None, fps).map_err(|e| {
-        let message = e.to_string().split_whitespace().collect::<Vec<_>>().join(" ");
+        let message = e
+            .to_string()
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
         ReviewError::run(path, message)
     })
 }
@@ -97,7 +103,10 @@ impl ReviewSource {
     /// (`video` overrides the one run.json names) and corrections.toml.
     pub fn from_run_dir(dir: &Path, video: Option<&Path>) -> Result<Self, ReviewError> {
         if !dir.is_dir() {
-            return Err(ReviewError::run(dir, "no such folder; give a `gait run` output folder"));
+            return Err(ReviewError::run(
+                dir,
+                "no such folder; give a `gait run` output folder",
+            ));
         }
         let manifest_path = dir.join("run.json");
         let manifest = read_json(&manifest_path)?;
@@ -123,8 +132,7 @@ impl ReviewSource {
             (None, Some(v)) => check_video(v, frame_size),
             (None, None) => Err("run.json names no input video: plots only".into()),
         };
-        let regenerated =
-            gait_pipeline::regenerated_dir(dir, &config).filter(|r| inside(dir, r));
+        let regenerated = gait_pipeline::regenerated_dir(dir, &config).filter(|r| inside(dir, r));
         let corrections_path = dir.join("corrections.toml");
         let corrections = saved_corrections(&corrections_path, &seq)?;
         let mut kin = config.kinematics.clone();
@@ -186,9 +194,9 @@ impl ReviewSource {
         if kin.frame_size.is_none() {
             kin.frame_size = frame_size;
         }
-        let size_set = kin
-            .frame_size
-            .map_or(String::new(), |[w, h]| format!(" --set 'kinematics.frame_size=[{w}, {h}]'"));
+        let size_set = kin.frame_size.map_or(String::new(), |[w, h]| {
+            format!(" --set 'kinematics.frame_size=[{w}, {h}]'")
+        });
         Ok(ReviewSource {
             title: keypoints.display().to_string(),
             rerun: format!(

@@ -48,7 +48,9 @@ pub fn execute(args: Args) -> Result<(), CliError> {
         (None, Some(kp)) => {
             let fps = args.fps.unwrap_or(0.0);
             if !(fps.is_finite() && fps > 0.0) {
-                return Err(CliError(format!("--fps {fps} must be a positive frame rate")));
+                return Err(CliError(format!(
+                    "--fps {fps} must be a positive frame rate"
+                )));
             }
             ReviewSource::from_keypoints(
                 kp,
