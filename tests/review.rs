@@ -301,7 +301,8 @@ fn a_run_without_its_video_shows_the_plots_and_says_why() {
     let run = copy_run(&work.path().join("run"));
     let manifest = run.join("run.json");
     let mut v = read_json(&manifest);
-    v["input"]["path"] = serde_json::json!(work.path().join("moved.mp4"));
+    v["input"]["path"] = serde_json::json!("moved.mp4");
+    v["input"]["absolute_path"] = serde_json::json!(work.path().join("moved.mp4"));
     std::fs::write(&manifest, v.to_string()).unwrap();
     let server = Server::start(&[run.as_os_str()]);
     let (status, body) = server.get("/api/run");
@@ -382,4 +383,30 @@ fn bad_input_is_one_line() {
         gait().arg("review").arg(work.path()),
         &["run.json", "gait run"],
     );
+}
+
+#[test]
+fn a_zero_shot_run_shows_its_regenerated_frames() {
+    // The tiny random SD 1.5 + ControlNet of gait-diffuse's fixtures: noise images, real wiring.
+    let work = tempfile::tempdir().unwrap();
+    let run = work.path().join("zs");
+    let mut cmd = common::sample_run(&run, 150, 152);
+    for s in common::tiny_controlnet_sets() {
+        cmd.args(["--set", &s]);
+    }
+    run_ok(&mut cmd);
+    let server = Server::start(&[run.as_os_str()]);
+    let (status, body) = server.get("/api/run");
+    assert_eq!(status, 200);
+    let data: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(data["regenerated"], serde_json::json!([150, 151, 152]));
+    let (status, png) = server.get("/api/frame/151?kind=regenerated");
+    assert_eq!(status, 200);
+    assert!(
+        png.starts_with("\u{fffd}PNG"),
+        "{:?}",
+        &png[..8.min(png.len())]
+    );
+    assert_eq!(server.get("/api/frame/151").0, 200);
+    assert_eq!(server.get("/api/frame/149?kind=regenerated").0, 404);
 }

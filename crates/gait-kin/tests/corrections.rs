@@ -316,3 +316,65 @@ fn a_file_that_does_not_fit_the_keypoints_is_refused() {
         "{e}"
     );
 }
+
+/// A review tool recomputes from corrections in memory before saving them: the result must be
+/// the one `analyse` gives on the saved file, summary (path, sha256) included, and a bad set is
+/// refused with the same message.
+#[test]
+fn corrections_in_memory_give_what_the_saved_file_gives() {
+    let seq = sequence();
+    let dir = tempfile::tempdir().unwrap();
+    let c = Corrections {
+        swap: vec![FrameRange {
+            first: 155,
+            last: 163,
+        }],
+        event: vec![event(
+            Side::Right,
+            EventKind::HeelStrike,
+            60,
+            EventAction::Add,
+        )],
+        exclude: vec![FrameRange {
+            first: 186,
+            last: 192,
+        }],
+        keypoint: vec![KeypointEdit {
+            frame: 140,
+            name: "right_ankle".into(),
+            x: 812.5,
+            y: 901.0,
+        }],
+    };
+    let path = write(dir.path(), &c);
+    let post = PostprocessConfig::default();
+    let from_file = analyse(&seq, &post, &kin(Some(&path))).unwrap();
+    let sha = gait_kin::corrections::sha256_hex(c.to_toml().as_bytes());
+    let in_memory = gait_kin::analyse_corrected(&seq, &post, &kin(None), &c, &path, sha).unwrap();
+    assert_eq!(
+        serde_json::to_value(&in_memory).unwrap(),
+        serde_json::to_value(&from_file).unwrap()
+    );
+    // Debug text compares the NaNs of undefined samples too.
+    assert_eq!(
+        format!("{:?}", in_memory.angles),
+        format!("{:?}", from_file.angles)
+    );
+    assert_eq!(
+        format!("{:?}", in_memory.filtered),
+        format!("{:?}", from_file.filtered)
+    );
+
+    let mut bad = c.clone();
+    bad.swap.push(FrameRange {
+        first: 160,
+        last: 170,
+    });
+    let path = write(dir.path(), &bad);
+    let from_file = analyse(&seq, &post, &kin(Some(&path))).unwrap_err();
+    let in_memory =
+        gait_kin::analyse_corrected(&seq, &post, &kin(None), &bad, &path, String::new())
+            .unwrap_err();
+    assert_eq!(in_memory.to_string(), from_file.to_string());
+    assert!(in_memory.to_string().contains("overlaps"), "{in_memory}");
+}

@@ -41,7 +41,11 @@ pub struct RunManifest {
 
 #[derive(Debug, Clone, Serialize)]
 pub struct InputRecord {
+    /// As given on the command line.
     pub path: PathBuf,
+    /// The same, absolute (how `gait review` finds the video from anywhere).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub absolute_path: Option<PathBuf>,
     pub sha256: String,
     pub width: u32,
     pub height: u32,

@@ -107,6 +107,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         command: opts.command.clone(),
         input: InputRecord {
             path: opts.input.clone(),
+            absolute_path: std::path::absolute(&opts.input).ok(),
             sha256: models.input_key.clone(),
             width: info.width,
             height: info.height,

@@ -194,3 +194,57 @@ impl RegeneratedStore {
         v
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three 40x30 PNG frames in a folder (an image-folder input), frame k grey level 60k.
+    fn folder() -> tempfile::TempDir {
+        let dir = tempfile::tempdir().unwrap();
+        for k in 0..3u8 {
+            let img = image::RgbImage::from_pixel(40, 30, image::Rgb([60 * k, 60 * k, 60 * k]));
+            img.save(dir.path().join(format!("f{k}.png"))).unwrap();
+        }
+        dir
+    }
+
+    #[test]
+    fn frames_are_jpegs_of_the_input_and_only_those_of_the_run() {
+        let dir = folder();
+        let store = FrameStore::start(dir.path().to_path_buf(), 1..=2);
+        for k in 1..=2usize {
+            let jpeg = store.get(k).unwrap();
+            let back = image::load_from_memory(&jpeg).unwrap().to_rgb8();
+            assert_eq!(back.dimensions(), (40, 30));
+            let level = back.get_pixel(20, 15)[0] as i32;
+            assert!((level - 60 * k as i32).abs() <= 2, "frame {k}: {level}");
+        }
+        let e = store.get(0).unwrap_err();
+        assert!(e.0.contains("outside the run (frames 1-2)"), "{}", e.0);
+        assert!(store.get(3).is_err());
+    }
+
+    #[test]
+    fn a_video_shorter_than_the_run_says_so() {
+        let dir = folder();
+        let store = FrameStore::start(dir.path().to_path_buf(), 0..=5);
+        let e = store.get(4).unwrap_err();
+        assert!(e.0.contains("has no frame 4"), "{}", e.0);
+    }
+
+    #[test]
+    fn regenerated_frames_are_found_by_number_only() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["000007.png", "000012.png", "notes.txt", "x.png"] {
+            std::fs::write(dir.path().join(name), name).unwrap();
+        }
+        let store = RegeneratedStore::new(dir.path().to_path_buf());
+        assert_eq!(store.frames(), vec![7, 12]);
+        assert_eq!(store.get(7).unwrap().as_slice(), b"000007.png");
+        assert!(store.get(8).is_none());
+        // Served from memory once read.
+        std::fs::remove_file(dir.path().join("000007.png")).unwrap();
+        assert!(store.get(7).is_some());
+    }
+}

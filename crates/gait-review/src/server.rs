@@ -194,3 +194,16 @@ async fn frame(
         ),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::same;
+
+    #[test]
+    fn tokens_match_only_whole() {
+        assert!(same("5f60a7", "5f60a7"));
+        assert!(!same("5f60a7", "5f60a8"));
+        assert!(!same("5f60a7", "5f60a"));
+        assert!(!same("", "5f60a7"));
+    }
+}

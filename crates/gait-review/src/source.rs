@@ -90,6 +90,25 @@ fn check_video(path: &Path, size: Option<[u32; 2]>) -> Result<PathBuf, String> {
     }
 }
 
+/// The input video run.json names: its absolute path when that exists, else the path as given
+/// on the command line, tried from here and from the run folder and each folder above it
+/// (`gait run` was run from one of them, usually).
+fn named_video(manifest: &Value, dir: &Path) -> Option<PathBuf> {
+    let get = |k: &str| {
+        manifest
+            .pointer(k)
+            .and_then(Value::as_str)
+            .map(PathBuf::from)
+    };
+    let given = get("/input/path")?;
+    let found = get("/input/absolute_path")
+        .into_iter()
+        .chain([given.clone()])
+        .chain(dir.ancestors().map(|a| a.join(&given)))
+        .find(|p| p.exists());
+    Some(found.unwrap_or(given))
+}
+
 /// `dir` holds `inner` (both made absolute and free of `..`).
 fn inside(dir: &Path, inner: &Path) -> bool {
     match (dir.canonicalize(), inner.canonicalize()) {
@@ -123,10 +142,7 @@ impl ReviewSource {
                 .map(|v| v as u32)
         };
         let frame_size = size("width").zip(size("height")).map(|(w, h)| [w, h]);
-        let named = manifest
-            .pointer("/input/path")
-            .and_then(Value::as_str)
-            .map(PathBuf::from);
+        let named = named_video(&manifest, dir);
         let video = match (video, &named) {
             (Some(v), _) => check_video(v, frame_size),
             (None, Some(v)) => check_video(v, frame_size),
