@@ -300,6 +300,10 @@
     $('cycles').innerHTML = `<p>accepted: left ${S.an.accepted.left}, right ${S.an.accepted.right}; ` +
       `rejected: left ${S.an.rejected.left}, right ${S.an.rejected.right}</p>` +
       `<table><tr><th>side</th><th>frames</th><th>verdict</th></tr>${cy}</table>`;
+    const st = S.an.spatiotemporal.map((p) => `<tr><td>${escapeHtml(p.parameter)}</td><td>${escapeHtml(p.side)}</td>` +
+      `<td>${p.mean === null ? '–' : p.mean.toFixed(2)}${p.sd === null || p.n < 2 ? '' : ' ± ' + p.sd.toFixed(2)}</td>` +
+      `<td>${escapeHtml(p.unit)}</td><td>${p.n}</td></tr>`).join('');
+    $('spatiotemporal').innerHTML = st ? `<table><tr><th>parameter</th><th>side</th><th>mean ± SD</th><th>unit</th><th>n</th></tr>${st}</table>` : 'none';
     $('warnings').innerHTML = S.an.warnings.map((w) => `<li>${escapeHtml(w)}</li>`).join('') || '<li>none</li>';
     markCurrentRows();
   }
