@@ -64,6 +64,8 @@ pub(crate) struct Driver<'a> {
     pub(crate) n_keypoints: usize,
     /// False for the pass over the original frames (straight to pose).
     pub(crate) regenerate: bool,
+    /// False: regenerate (and cache) only, estimate no pose.
+    pub(crate) estimate: bool,
     /// The stage record the pose results count under.
     pub(crate) pose_record: &'static str,
     pub(crate) order: Order,
@@ -86,6 +88,9 @@ impl Driver<'_> {
 
     /// Poses of `frames` (consecutive members of the pass's order).
     pub(crate) fn process(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, PipelineError> {
+        if !self.estimate {
+            return self.regenerate_only(frames);
+        }
         let record = self.pose_record;
         let mut poses: Vec<Option<Pose>> = frames
             .iter()
@@ -188,6 +193,20 @@ impl Driver<'_> {
             .into_iter()
             .map(|p| p.unwrap_or_else(|| Pose::empty(self.n_keypoints)))
             .collect())
+    }
+
+    /// Regenerates (or finds cached) the frames with the subject in view and
+    /// estimates nothing: empty poses.
+    fn regenerate_only(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, PipelineError> {
+        let subject = self.subject;
+        let todo: Vec<&Frame> = frames
+            .iter()
+            .filter(|f| subject.is_none_or(|s| s.contains_key(&f.index)))
+            .collect();
+        if !todo.is_empty() && self.regenerate {
+            self.regenerated(&todo)?;
+        }
+        Ok(vec![Pose::empty(self.n_keypoints); frames.len()])
     }
 
     /// The frames the pose model should see: regenerated (or cached) ones.

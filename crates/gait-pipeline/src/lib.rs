@@ -24,5 +24,5 @@ pub use config::PipelineConfig;
 pub use error::PipelineError;
 pub use outputs::{OutputOptions, Outputs, write_outputs};
 pub use overlay::regenerated_dir;
-pub use runner::{RunOptions, RunSummary, run};
+pub use runner::{RunOptions, RunSummary, regenerate_part, run};
 pub use selection::{SelectionConfig, SelectionRecord};

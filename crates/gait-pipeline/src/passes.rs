@@ -30,6 +30,29 @@ pub(crate) struct PassOutput {
     pub(crate) selection: SelectionRecord,
 }
 
+/// Which frames a pass hands on: `regenerate` = through edges and regenerator
+/// into the pose cache, else the original frames into the original-pose
+/// cache; `estimate` = false stops after the regenerator (a part of a split
+/// run only fills the image cache).
+#[derive(Clone, Copy)]
+struct Through {
+    regenerate: bool,
+    estimate: bool,
+}
+
+const ORIGINAL: Through = Through {
+    regenerate: false,
+    estimate: true,
+};
+const REGENERATED: Through = Through {
+    regenerate: true,
+    estimate: true,
+};
+const REGENERATED_ONLY: Through = Through {
+    regenerate: true,
+    estimate: false,
+};
+
 /// What every pass shares: the stages, caches and per-stage records.
 pub(crate) struct Passes<'a> {
     pub(crate) config: &'a PipelineConfig,
@@ -53,7 +76,7 @@ impl Passes<'_> {
         } else if self.config.regenerator.needs_poses() {
             self.inpainting()
         } else {
-            let (all, processed, cached) = self.pass(true, self.grid(), None, &|_| true)?;
+            let (all, processed, cached) = self.pass(REGENERATED, self.grid(), None, &|_| true)?;
             Ok(PassOutput {
                 all,
                 from_cache: cached.len(),
@@ -71,12 +94,14 @@ impl Passes<'_> {
         }
     }
 
-    /// One pass: `regenerate` = through edges and regenerator into the pose
-    /// cache, else the original frames into the original-pose cache. Frames
-    /// on the grid (and the last) are processed if `wanted`.
+    /// One pass (see [`Through`]). Frames on the grid (and the last) are
+    /// processed if `wanted`.
     fn pass(
         &mut self,
-        regenerate: bool,
+        Through {
+            regenerate,
+            estimate,
+        }: Through,
         order: Order,
         original_poses: Option<BTreeMap<usize, Pose>>,
         wanted: &dyn Fn(usize) -> bool,
@@ -104,6 +129,7 @@ impl Passes<'_> {
             records: self.records,
             n_keypoints: self.n_keypoints,
             regenerate,
+            estimate,
             pose_record: if regenerate { "pose" } else { ORIGINAL_POSE },
             order,
             last_estimated: None,
@@ -116,10 +142,39 @@ impl Passes<'_> {
         Ok(found)
     }
 
+    /// Part `part` of `parts` of the frames the run regenerates, through the
+    /// regenerator only (see [`crate::runner::regenerate_part`]). The frames
+    /// are dealt out in turn, so every part gets an even share of the walk.
+    pub(crate) fn regenerate_part(&mut self, part: usize, parts: usize) -> Result<(), PipelineError> {
+        let needs_poses = self.config.regenerator.needs_poses();
+        let stride = self.config.selection.stride;
+        let first = self.config.input.first_frame;
+        let original = if self.config.selection.mode == SelectionMode::Poor || needs_poses {
+            Some(self.pass(ORIGINAL, self.grid(), None, &|_| true)?.1)
+        } else {
+            None
+        };
+        let masks = |o: &Vec<(usize, Pose)>| needs_poses.then(|| o.iter().cloned().collect());
+        match original {
+            Some(o) if self.config.selection.mode == SelectionMode::Poor => {
+                let poor = self.judge(&o, &mut SelectionRecord::default())?;
+                let mine: BTreeSet<usize> = poor.iter().copied().skip(part).step_by(parts).collect();
+                let order = Order::Subset { frames: poor, stride };
+                self.pass(REGENERATED_ONLY, order, masks(&o), &|f| mine.contains(&f))?;
+            }
+            o => {
+                let m = o.as_ref().and_then(masks);
+                let mine = |f: usize| ((f - first) / stride) % parts == part;
+                self.pass(REGENERATED_ONLY, self.grid(), m, &mine)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Poses on the original frames, then the regeneration pass over the
     /// frames whose pose is poor; the rest keep their original pose.
     fn poor_frames(&mut self) -> Result<PassOutput, PipelineError> {
-        let (all, original, cached_original) = self.pass(false, self.grid(), None, &|_| true)?;
+        let (all, original, cached_original) = self.pass(ORIGINAL, self.grid(), None, &|_| true)?;
         let mut selection = SelectionRecord::default();
         let poor = self.judge(&original, &mut selection)?;
         let mut regenerated: BTreeMap<usize, Pose> = BTreeMap::new();
@@ -135,7 +190,8 @@ impl Passes<'_> {
                 .regenerator
                 .needs_poses()
                 .then(|| original.iter().cloned().collect());
-            let (_, found, cached) = self.pass(true, order, masks, &|f| wanted.contains(&f))?;
+            let (_, found, cached) =
+                self.pass(REGENERATED, order, masks, &|f| wanted.contains(&f))?;
             regenerated.extend(found);
             cached_regenerated = cached;
         }
@@ -193,9 +249,10 @@ impl Passes<'_> {
     /// Inpainting without selection: poses on the original frames for the
     /// leg masks, then every grid frame through the regenerator.
     fn inpainting(&mut self) -> Result<PassOutput, PipelineError> {
-        let (_, original, _) = self.pass(false, self.grid(), None, &|_| true)?;
+        let (_, original, _) = self.pass(ORIGINAL, self.grid(), None, &|_| true)?;
         let masks = original.iter().cloned().collect();
-        let (all, processed, cached) = self.pass(true, self.grid(), Some(masks), &|_| true)?;
+        let (all, processed, cached) =
+            self.pass(REGENERATED, self.grid(), Some(masks), &|_| true)?;
         Ok(PassOutput {
             all,
             processed,

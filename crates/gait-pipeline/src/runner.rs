@@ -51,17 +51,26 @@ impl RunSummary {
     }
 }
 
-/// Runs the pipeline on `opts.input` and writes the run folder: the subject
-/// pass, the pose passes, the keypoints, then the kinematics.
-pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, PipelineError> {
-    let started_unix = SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
+/// Everything the passes need, up to and including the subject pass.
+struct Prepared {
+    info: InputInfo,
+    fps: f64,
+    stages: registry::Stages,
+    names: Vec<String>,
+    models: Models,
+    subject: Option<gait_subject::Subject>,
+    caches: plan::StageCaches,
+    records: BTreeMap<String, StageRecord>,
+    warnings: Vec<String>,
+}
+
+/// Opens the input, builds the stages, finds the subject and opens the stage caches.
+fn prepare(config: &PipelineConfig, opts: &RunOptions) -> Result<Prepared, PipelineError> {
     let info = InputInfo::open(&opts.input)?;
     let fps = config.input.fps.unwrap_or(info.fps);
     registry::check_devices(config)?;
     let ctx = StageContext::new(&opts.models_dir).on(config.run.device);
-    let mut stages = registry::build(config, &ctx)?;
+    let stages = registry::build(config, &ctx)?;
     let names = stages.pose.keypoint_names();
     check_selection(config, &names)?;
     create_out_dir(&opts.out)?;
@@ -69,12 +78,43 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let root = plan::cache_root(config, &opts.out);
     let total = range_len(config, &info);
     let bar = |pass: &str| progress_bar(opts.progress, total, pass);
-
-    let (subject, subject_record, mut warnings) =
+    let (subject, subject_record, warnings) =
         find_subject(config, &info, fps, &ctx, &models, root.as_deref(), &bar)?;
     let (caches, mut records) =
         plan::stage_caches(config, &models, subject.as_ref(), root.as_deref())?;
     records.extend(subject_record);
+    Ok(Prepared {
+        info,
+        fps,
+        stages,
+        names,
+        models,
+        subject,
+        caches,
+        records,
+        warnings,
+    })
+}
+
+/// Runs the pipeline on `opts.input` and writes the run folder: the subject
+/// pass, the pose passes, the keypoints, then the kinematics.
+pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, PipelineError> {
+    let started_unix = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let Prepared {
+        info,
+        fps,
+        mut stages,
+        names,
+        models,
+        subject,
+        caches,
+        mut records,
+        mut warnings,
+    } = prepare(config, opts)?;
+    let total = range_len(config, &info);
+    let bar = |pass: &str| progress_bar(opts.progress, total, pass);
     let out = Passes {
         config,
         info: &info,
@@ -158,6 +198,42 @@ fn range_len(config: &PipelineConfig, info: &InputInfo) -> Option<usize> {
         let end = config.input.last_frame.map_or(n, |l| (l + 1).min(n));
         end.saturating_sub(config.input.first_frame)
     })
+}
+
+/// Part `part` (from 0) of `parts` of a run's regeneration, for a study spread over a
+/// cluster: the subject pass and the passes on the original frames (both cached, so every part
+/// finds the same), then the edge maps and regenerated images of the part's share of the
+/// frames to regenerate, into the shared cache. No pose is estimated from them and the run
+/// folder gets no results: a later `run` with the same config takes the images from the cache
+/// and gives exactly what it gives without the parts. Returns the regenerator's record.
+pub fn regenerate_part(
+    config: &PipelineConfig,
+    opts: &RunOptions,
+    part: usize,
+    parts: usize,
+) -> Result<StageRecord, PipelineError> {
+    if plan::cache_root(config, &opts.out).is_none() {
+        return Err(PipelineError::config(
+            "[run]",
+            "regenerating a part of a run needs the cache (run.cache = true)",
+        ));
+    }
+    let mut p = prepare(config, opts)?;
+    let total = range_len(config, &p.info);
+    let bar = |pass: &str| progress_bar(opts.progress, total, pass);
+    Passes {
+        config,
+        info: &p.info,
+        stages: &mut p.stages,
+        caches: &p.caches,
+        records: &mut p.records,
+        n_keypoints: p.names.len(),
+        names: &p.names,
+        subject: p.subject.as_ref().map(|s| &s.boxes),
+        bar: &bar,
+    }
+    .regenerate_part(part, parts)?;
+    Ok(p.records.remove("regenerator").unwrap_or_default())
 }
 
 /// The subject pass (cached per frame), its stage record and the warnings it
