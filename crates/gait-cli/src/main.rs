@@ -43,6 +43,8 @@ enum Command {
     Export(commands::export::Args),
     /// Look at a run frame by frame in the browser and save corrections.toml.
     Review(commands::review::Args),
+    /// Run a study (one video per row) locally or on Slurm, and gather a cohort table.
+    Batch(commands::batch::Args),
 }
 
 fn main() -> ExitCode {
@@ -57,6 +59,10 @@ fn main() -> ExitCode {
         Command::Models(args) => commands::models::execute(args, &models_dir),
         Command::Export(args) => commands::export::execute(args),
         Command::Review(args) => commands::review::execute(args),
+        Command::Batch(args) => match commands::batch::execute(args, &models_dir) {
+            Ok(code) => return code,
+            Err(e) => Err(e),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

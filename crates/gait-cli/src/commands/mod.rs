@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod ablate;
+pub mod batch;
 pub mod edges;
 pub mod eval;
 pub mod export;

@@ -1,6 +1,6 @@
 use std::path::Path;
 
-use gait_pipeline::RunOptions;
+use gait_pipeline::{PipelineConfig, RunOptions};
 
 use crate::commands::PipelineArgs;
 use crate::error::CliError;
@@ -23,7 +23,13 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
         progress: !p.no_progress,
         command: std::env::args().collect(),
     };
-    let summary = gait_pipeline::run(&config, &opts)?;
+    run_and_report(&config, &opts)
+}
+
+/// What `gait run` does once the config is resolved: the run, then the report step, with the
+/// warnings and the closing line on stderr. `gait batch` runs each row through here.
+pub fn run_and_report(config: &PipelineConfig, opts: &RunOptions) -> Result<(), CliError> {
+    let summary = gait_pipeline::run(config, opts)?;
     for w in &summary.manifest.warnings {
         eprintln!("warning: {w}");
     }
@@ -33,9 +39,9 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     // The report and exports read what the run wrote, so they show exactly
     // the files a reader of the run folder gets.
     let outputs = gait_pipeline::write_outputs(&gait_pipeline::OutputOptions {
-        dir: &p.out,
+        dir: &opts.out,
         input: Some(opts.input.as_path()),
-        config: &config,
+        config,
         fps: None,
         progress: opts.progress,
     })?;
