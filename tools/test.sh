@@ -9,4 +9,7 @@ target/debug/gait models fetch blazepose
 bash tools/export/setup_ezc3d.sh >/dev/null
 # puppeteer-core, which drives Chromium in the `gait review` browser test.
 bash tools/review/setup_puppeteer.sh >/dev/null
+# A one-node Slurm for the `gait batch` tests, stopped when the tests end.
+eval "export $(bash tools/batch/slurm.sh up)"
+trap 'bash tools/batch/slurm.sh down' EXIT
 cargo test --workspace

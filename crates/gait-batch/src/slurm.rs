@@ -70,11 +70,11 @@ pub struct SubmitOptions {
     pub jobs: Option<usize>,
 }
 
-fn script(out: &Path, name: &str, body: &str) -> Result<std::path::PathBuf, BatchError> {
+/// A job script that runs `command` (the job's name and log file are sbatch options, which
+/// take any path).
+fn script(out: &Path, name: &str, command: &str) -> Result<std::path::PathBuf, BatchError> {
     let path = out.join("batch").join(name);
-    let text = format!(
-        "#!/bin/bash\n# Written by `gait batch`; submitted with sbatch.\nset -e\n{body}\n"
-    );
+    let text = format!("#!/bin/bash\n# Written by `gait batch`; submitted with sbatch.\n{command}\n");
     gait_pipeline::atomic::write(&path, text.as_bytes())
         .map_err(|e| BatchError::io(format!("writing {}", path.display()), e))?;
     Ok(path)
@@ -124,11 +124,11 @@ pub fn submit(
     std::fs::create_dir_all(&logs)
         .map_err(|e| BatchError::io(format!("creating {}", logs.display()), e))?;
     let exe = quote(launcher.exe.as_os_str());
-    let header = |job: &str| {
-        format!(
-            "#SBATCH --job-name=gait-{job}\n#SBATCH --output={}/slurm-%A_%a.out",
-            logs.display()
-        )
+    let named = |job: &str, log: &str| {
+        vec![
+            format!("--job-name=gait-{job}"),
+            format!("--output={}", logs.join(log).display()),
+        ]
     };
     let task = |extra: &str| {
         let mut a: Vec<String> = launcher.global.iter().map(|g| quote(g)).collect();
@@ -139,38 +139,23 @@ pub fn submit(
     let parts_script = script(
         out,
         "parts.sh",
-        &format!(
-            "{}\n{}",
-            header("part"),
-            task(&format!(
-                "--row $((SLURM_ARRAY_TASK_ID / {k})) --part $((SLURM_ARRAY_TASK_ID % {k}))"
-            ))
-        ),
+        &task(&format!(
+            "--row $((SLURM_ARRAY_TASK_ID / {k})) --part $((SLURM_ARRAY_TASK_ID % {k}))"
+        )),
     )?;
-    let runs_script = script(
-        out,
-        "runs.sh",
-        &format!("{}\n{}", header("run"), task("--row $SLURM_ARRAY_TASK_ID")),
-    )?;
+    let runs_script = script(out, "runs.sh", &task("--row $SLURM_ARRAY_TASK_ID"))?;
     let mut agg_args: Vec<String> = launcher.aggregate_args(out).iter().map(|g| quote(g)).collect();
     agg_args.insert(0, exe.clone());
-    let agg_script = script(
-        out,
-        "aggregate.sh",
-        &format!(
-            "#SBATCH --job-name=gait-aggregate\n#SBATCH --output={}/slurm-aggregate-%j.out\nexec {}",
-            logs.display(),
-            agg_args.join(" ")
-        ),
-    )?;
+    let agg_script = script(out, "aggregate.sh", &format!("exec {}", agg_args.join(" ")))?;
 
     // One array per resource class: the rows that need a GPU ask for one.
     let mut by_gpu: BTreeMap<bool, Vec<usize>> = BTreeMap::new();
     for r in rows.iter().filter_map(|&i| plan.row(i)) {
         by_gpu.entry(r.gpu).or_default().push(r.index);
     }
-    let base = |gpu: bool| {
+    let base = |gpu: bool, job: &str, log: &str| {
         let mut a = opts.slurm_args.clone();
+        a.extend(named(job, log));
         if gpu {
             a.push("--gres=gpu:1".into());
         }
@@ -185,14 +170,14 @@ pub fn submit(
             .collect();
         let mut after = Vec::new();
         if !split.is_empty() {
-            let mut a = base(gpu);
+            let mut a = base(gpu, "part", "slurm-%A_%a.out");
             a.push(format!("--array={}", array_list(&split, opts.jobs)));
             let id = sbatch(&a, &parts_script)?;
             after.push(id.clone());
             jobs.parts.push(ArrayJob { id, indices: split, gpu });
             jobs.write(out)?;
         }
-        let mut a = base(gpu);
+        let mut a = base(gpu, "run", "slurm-%A_%a.out");
         a.push(format!("--array={}", array_list(indices, opts.jobs)));
         if !after.is_empty() {
             a.push(format!("--dependency=afterany:{}", after.join(":")));
@@ -203,6 +188,7 @@ pub fn submit(
     }
     let runs: Vec<String> = jobs.runs.iter().map(|j| j.id.clone()).collect();
     let mut a = opts.slurm_args.clone();
+    a.extend(named("aggregate", "slurm-aggregate-%j.out"));
     if !runs.is_empty() {
         a.push(format!("--dependency=afterany:{}", runs.join(":")));
     }
