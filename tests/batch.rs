@@ -24,7 +24,11 @@ fn slurm_conf() -> &'static str {
             .arg("up")
             .output()
             .expect("bash runs");
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let text = String::from_utf8(out.stdout).unwrap();
         text.trim().strip_prefix("SLURM_CONF=").unwrap().to_string()
     })
@@ -36,12 +40,24 @@ fn clips() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap().keep();
-        for (name, start, frames) in [("a", "1.9", "140"), ("b", "2.0", "135"), ("c", "1.8", "145")] {
+        for (name, start, frames) in [
+            ("a", "1.9", "140"),
+            ("b", "2.0", "135"),
+            ("c", "1.8", "145"),
+        ] {
             let out = dir.join(format!("clip_{name}.mp4"));
             let status = Command::new("ffmpeg")
                 .args(["-v", "error", "-y", "-ss", start, "-i"])
                 .arg(sample_video())
-                .args(["-frames:v", frames, "-an", "-c:v", "libx264", "-preset", "veryfast"])
+                .args([
+                    "-frames:v",
+                    frames,
+                    "-an",
+                    "-c:v",
+                    "libx264",
+                    "-preset",
+                    "veryfast",
+                ])
                 .args(["-pix_fmt", "yuv420p"])
                 .arg(&out)
                 .status()
@@ -63,7 +79,11 @@ fn clips() -> &'static Path {
     })
 }
 
-const GOOD: [&str; 3] = ["S01_1_left_clip_a", "S01_2_left_clip_b", "S02_1_left_clip_c"];
+const GOOD: [&str; 3] = [
+    "S01_1_left_clip_a",
+    "S01_2_left_clip_b",
+    "S02_1_left_clip_c",
+];
 
 fn batch(study: &Path, out: &Path, extra: &[&str]) -> Command {
     let mut cmd = gait();
@@ -101,14 +121,24 @@ fn local_batch() -> &'static Path {
 
 fn same_results(a: &Path, b: &Path) {
     for f in ["keypoints.csv", "angles.csv", "events.csv", "cycles.csv"] {
-        let (x, y) = (std::fs::read(a.join(f)).unwrap(), std::fs::read(b.join(f)).unwrap());
-        assert!(x == y, "{f} differs between {} and {}", a.display(), b.display());
+        let (x, y) = (
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+        );
+        assert!(
+            x == y,
+            "{f} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
     }
 }
 
 fn cohort(out: &Path) -> Vec<Vec<String>> {
     let mut r = csv::Reader::from_path(out.join("cohort.csv")).unwrap();
-    r.records().map(|rec| rec.unwrap().iter().map(String::from).collect()).collect()
+    r.records()
+        .map(|rec| rec.unwrap().iter().map(String::from).collect())
+        .collect()
 }
 
 #[test]
@@ -139,12 +169,16 @@ fn local_and_slurm_give_what_gait_run_gives_and_a_corrupt_video_fails_alone() {
     .unwrap();
     assert_eq!(code(&done), Some(3), "{}", stderr(&done));
     for run in GOOD {
-        same_results(&local.join("runs").join(run), &slurm.path().join("runs").join(run));
+        same_results(
+            &local.join("runs").join(run),
+            &slurm.path().join("runs").join(run),
+        );
     }
     assert!(slurm.path().join("logs").read_dir().unwrap().count() >= 4);
-    let jobs: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(slurm.path().join("batch/jobs.json")).unwrap())
-            .unwrap();
+    let jobs: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(slurm.path().join("batch/jobs.json")).unwrap(),
+    )
+    .unwrap();
     assert!(jobs["aggregate"].as_str().is_some(), "{jobs}");
 
     for out in [local, slurm.path()] {
@@ -154,17 +188,35 @@ fn local_and_slurm_give_what_gait_run_gives_and_a_corrupt_video_fails_alone() {
         let failed: Vec<&Vec<String>> = rows.iter().filter(|r| r[7] == "failed").collect();
         assert_eq!(failed.len(), 1);
         assert_eq!(failed[0][4], "S03_1_left_corrupt");
-        assert!(failed[0][8].contains("not a readable video"), "{:?}", failed[0]);
+        assert!(
+            failed[0][8].contains("not a readable video"),
+            "{:?}",
+            failed[0]
+        );
         assert_eq!(rows.iter().filter(|r| r[7] == "done").count(), 6);
         // The prosthetic side is marked where the row set it.
-        assert!(rows.iter().any(|r| r[4] == GOOD[0] && r[5] == "right" && r[6] == "yes"));
+        assert!(
+            rows.iter()
+                .any(|r| r[4] == GOOD[0] && r[5] == "right" && r[6] == "yes")
+        );
         let html = std::fs::read_to_string(out.join("cohort.html")).unwrap();
-        assert!(html.contains("Group: mean ± SD across") && html.contains("<svg"), "cohort.html");
+        assert!(
+            html.contains("Group: mean ± SD across") && html.contains("<svg"),
+            "cohort.html"
+        );
         assert!(html.contains("S03_1_left_corrupt"));
-        let status = gait().args(["batch", "status"]).arg(out).env("SLURM_CONF", slurm_conf()).output().unwrap();
+        let status = gait()
+            .args(["batch", "status"])
+            .arg(out)
+            .env("SLURM_CONF", slurm_conf())
+            .output()
+            .unwrap();
         let text = String::from_utf8_lossy(&status.stdout);
         assert_eq!(text.matches(" done ").count(), 3, "{text}");
-        assert!(text.contains("failed") && text.contains("moov atom"), "{text}");
+        assert!(
+            text.contains("failed") && text.contains("moov atom"),
+            "{text}"
+        );
     }
 }
 
@@ -180,7 +232,9 @@ fn a_cancelled_batch_reruns_only_its_unfinished_rows() {
         std::fs::copy(clips().join(clip), out.path().join(clip)).unwrap();
     }
     let dir = out.path().join("batch");
-    let submitted = batch(&study, &dir, &["--executor", "slurm", "--jobs", "1"]).output().unwrap();
+    let submitted = batch(&study, &dir, &["--executor", "slurm", "--jobs", "1"])
+        .output()
+        .unwrap();
     assert_eq!(code(&submitted), Some(0), "{}", stderr(&submitted));
     let ids: Vec<String> = String::from_utf8_lossy(&submitted.stdout)
         .split_whitespace()
@@ -190,10 +244,17 @@ fn a_cancelled_batch_reruns_only_its_unfinished_rows() {
     let first_done = dir.join("runs").join(GOOD[0]).join("report.html");
     let t = Instant::now();
     while !first_done.exists() {
-        assert!(t.elapsed() < Duration::from_secs(300), "the first row never finished");
+        assert!(
+            t.elapsed() < Duration::from_secs(300),
+            "the first row never finished"
+        );
         std::thread::sleep(Duration::from_millis(200));
     }
-    let cancelled = Command::new("scancel").args(&ids).env("SLURM_CONF", slurm_conf()).status().unwrap();
+    let cancelled = Command::new("scancel")
+        .args(&ids)
+        .env("SLURM_CONF", slurm_conf())
+        .status()
+        .unwrap();
     assert!(cancelled.success());
     let t = Instant::now();
     loop {
@@ -205,10 +266,15 @@ fn a_cancelled_batch_reruns_only_its_unfinished_rows() {
         if String::from_utf8_lossy(&q.stdout).trim().is_empty() {
             break;
         }
-        assert!(t.elapsed() < Duration::from_secs(60), "scancel left jobs in the queue");
+        assert!(
+            t.elapsed() < Duration::from_secs(60),
+            "scancel left jobs in the queue"
+        );
         std::thread::sleep(Duration::from_millis(300));
     }
-    let again = batch(&study, &dir, &["--executor", "slurm", "--wait"]).output().unwrap();
+    let again = batch(&study, &dir, &["--executor", "slurm", "--wait"])
+        .output()
+        .unwrap();
     let err = stderr(&again);
     assert_eq!(code(&again), Some(0), "{err}");
     // Only what had not finished ran again (the first row at least was complete).
@@ -220,7 +286,10 @@ fn a_cancelled_batch_reruns_only_its_unfinished_rows() {
         .unwrap_or_else(|| panic!("{err}"));
     assert!((1..3).contains(&complete), "{err}");
     for run in GOOD {
-        same_results(&local_batch().join("runs").join(run), &dir.join("runs").join(run));
+        same_results(
+            &local_batch().join("runs").join(run),
+            &dir.join("runs").join(run),
+        );
     }
 }
 
@@ -233,7 +302,15 @@ fn a_video_split_over_array_tasks_gives_the_unsplit_run() {
     let status = Command::new("ffmpeg")
         .args(["-v", "error", "-y", "-ss", "4.0", "-i"])
         .arg(sample_video())
-        .args(["-frames:v", "9", "-an", "-c:v", "libx264", "-preset", "veryfast"])
+        .args([
+            "-frames:v",
+            "9",
+            "-an",
+            "-c:v",
+            "libx264",
+            "-preset",
+            "veryfast",
+        ])
         .args(["-pix_fmt", "yuv420p"])
         .arg(&clip)
         .status()
@@ -251,18 +328,35 @@ fn a_video_split_over_array_tasks_gives_the_unsplit_run() {
     )
     .unwrap();
     let split = work.path().join("split");
-    let done = batch(&study, &split, &["--executor", "slurm", "--split-frames", "3", "--wait"])
-        .output()
-        .unwrap();
+    let done = batch(
+        &study,
+        &split,
+        &["--executor", "slurm", "--split-frames", "3", "--wait"],
+    )
+    .output()
+    .unwrap();
     assert_eq!(code(&done), Some(0), "{}", stderr(&done));
     let jobs: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(split.join("batch/jobs.json")).unwrap()).unwrap();
-    assert_eq!(jobs["parts"][0]["indices"], serde_json::json!([0, 1, 2]), "{jobs}");
+        serde_json::from_str(&std::fs::read_to_string(split.join("batch/jobs.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        jobs["parts"][0]["indices"],
+        serde_json::json!([0, 1, 2]),
+        "{jobs}"
+    );
     let run = split.join("runs/S01_left_clip");
     let manifest = common::read_json(&run.join("run.json"));
     // Every image came from the parts: the last task only estimated poses.
-    assert_eq!(manifest["stages"]["regenerator"]["computed"], 0, "{manifest}");
-    assert!(manifest["stages"]["regenerator"]["cached"].as_u64().unwrap() > 0);
+    assert_eq!(
+        manifest["stages"]["regenerator"]["computed"], 0,
+        "{manifest}"
+    );
+    assert!(
+        manifest["stages"]["regenerator"]["cached"]
+            .as_u64()
+            .unwrap()
+            > 0
+    );
 
     let plain = work.path().join("plain");
     let mut cmd = gait();
@@ -302,15 +396,28 @@ fn bad_studies_are_refused_before_anything_runs() {
     let out = work.path().join("out");
     let err = fails_with(
         &mut batch(&study, &out, &[]),
-        &["4 bad row(s), nothing submitted", "row 2 (missing.mp4)", "not found", "row 3", "colour",
-          "row 4", "same run folder `S01_1_left_clip_a` as row 1", "row 5", "sideways"],
+        &[
+            "4 bad row(s), nothing submitted",
+            "row 2 (missing.mp4)",
+            "not found",
+            "row 3",
+            "colour",
+            "row 4",
+            "same run folder `S01_1_left_clip_a` as row 1",
+            "row 5",
+            "sideways",
+        ],
     );
     assert!(!err.contains("row 1 "), "{err}");
     assert!(!out.exists(), "a refused study wrote {}", out.display());
 
     // Slurm asked for, but no sbatch on the PATH.
     let good = work.path().join("good.csv");
-    std::fs::write(&good, "video,subject,session,view,prosthetic_side,config,set\nclip_a.mp4,S01,1,left,,,\n").unwrap();
+    std::fs::write(
+        &good,
+        "video,subject,session,view,prosthetic_side,config,set\nclip_a.mp4,S01,1,left,,,\n",
+    )
+    .unwrap();
     let empty = work.path().join("empty-bin");
     std::fs::create_dir_all(&empty).unwrap();
     fails_with(

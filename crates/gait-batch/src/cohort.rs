@@ -41,8 +41,17 @@ pub struct CohortRow {
 
 pub fn header() -> String {
     let mut h: Vec<String> = [
-        "subject", "session", "view", "video", "run", "side", "prosthetic", "status", "error",
-        "accepted_cycles", "rejected_cycles",
+        "subject",
+        "session",
+        "view",
+        "video",
+        "run",
+        "side",
+        "prosthetic",
+        "status",
+        "error",
+        "accepted_cycles",
+        "rejected_cycles",
     ]
     .map(String::from)
     .to_vec();
@@ -57,7 +66,11 @@ pub fn header() -> String {
 }
 
 fn num(v: f64) -> String {
-    if v.is_finite() { format!("{v:.4}") } else { String::new() }
+    if v.is_finite() {
+        format!("{v:.4}")
+    } else {
+        String::new()
+    }
 }
 
 /// A CSV field: quoted when it holds a comma, quote or line break.
@@ -106,14 +119,14 @@ fn read_json(path: &Path) -> Option<Value> {
     serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()
 }
 
-/// The GPS of `side` from scores.csv (`score,side,joint,value,unit`).
+/// The (sagittal) GPS of `side` from scores.csv (`score,side,joint,value,unit`).
 fn gps(dir: &Path, side: &str) -> f64 {
     let Ok(text) = std::fs::read_to_string(dir.join("scores.csv")) else {
         return f64::NAN;
     };
     text.lines()
         .map(|l| l.split(',').collect::<Vec<_>>())
-        .find(|c| c.len() >= 4 && c[0] == "gps" && c[1] == side)
+        .find(|c| c.len() >= 4 && c[0].starts_with("gps") && c[1] == side)
         .and_then(|c| c[3].parse().ok())
         .unwrap_or(f64::NAN)
 }
@@ -123,8 +136,14 @@ fn peak_and_range(curves: &[CycleCurve], joint: &str) -> (f64, f64) {
         return (f64::NAN, f64::NAN);
     };
     let v = c.mean.iter().copied().filter(|v| v.is_finite());
-    let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
-    if hi >= lo { (hi, hi - lo) } else { (f64::NAN, f64::NAN) }
+    let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+        (a.min(x), b.max(x))
+    });
+    if hi >= lo {
+        (hi, hi - lo)
+    } else {
+        (f64::NAN, f64::NAN)
+    }
 }
 
 /// The rows of one video: two sides when it ran, one with the error when not.
@@ -153,17 +172,29 @@ fn rows_of(out: &Path, row: &PlannedRow, done: bool) -> Vec<CohortRow> {
     let manifest = read_json(&dir.join("run.json")).unwrap_or_default();
     let curves = read_cycles_csv(&dir.join("cycles.csv")).unwrap_or_default();
     let params = read_spatiotemporal(&dir.join("spatiotemporal.csv")).unwrap_or_default();
-    let warnings = manifest.get("warnings").and_then(Value::as_array).map(Vec::len);
+    let warnings = manifest
+        .get("warnings")
+        .and_then(Value::as_array)
+        .map(Vec::len);
     ["left", "right"]
         .into_iter()
         .map(|side| {
-            let mine: Vec<CycleCurve> =
-                curves.iter().filter(|c| c.side.as_str() == side).cloned().collect();
-            let count = |k: &str| manifest.pointer(&format!("/extra/kinematics/{k}/{side}")).and_then(Value::as_u64);
+            let mine: Vec<CycleCurve> = curves
+                .iter()
+                .filter(|c| c.side.as_str() == side)
+                .cloned()
+                .collect();
+            let count = |k: &str| {
+                manifest
+                    .pointer(&format!("/extra/kinematics/{k}/{side}"))
+                    .and_then(Value::as_u64)
+            };
             let param = |p: &str| {
                 params
                     .iter()
-                    .find(|x| x.parameter == p && (x.side == side || (p == "cadence" && x.side == "both")))
+                    .find(|x| {
+                        x.parameter == p && (x.side == side || (p == "cadence" && x.side == "both"))
+                    })
                     .map_or(f64::NAN, |x| x.mean)
             };
             CohortRow {
@@ -201,4 +232,43 @@ pub fn csv(rows: &[CohortRow]) -> String {
         s.push('\n');
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gait_eval::Side;
+
+    #[test]
+    fn peak_and_range_come_from_the_mean_curve() {
+        let c = CycleCurve {
+            side: Side::Left,
+            joint: "knee".into(),
+            percent: vec![0.0, 50.0, 100.0],
+            mean: vec![5.0, 62.5, f64::NAN],
+            sd: vec![1.0; 3],
+            n_cycles: 2,
+        };
+        assert_eq!(peak_and_range(std::slice::from_ref(&c), "knee"), (62.5, 57.5));
+        assert!(peak_and_range(&[c], "hip").0.is_nan());
+    }
+
+    #[test]
+    fn the_sagittal_gps_is_read_per_side() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("scores.csv"),
+            "score,side,joint,value,unit\ngvs,left,hip,4.5,deg\ngps_sagittal,left,,6.7,deg\ngps_sagittal,right,,4.8,deg\n",
+        )
+        .unwrap();
+        assert_eq!(gps(dir.path(), "left"), 6.7);
+        assert_eq!(gps(dir.path(), "right"), 4.8);
+        assert!(gps(&dir.path().join("none"), "left").is_nan());
+    }
+
+    #[test]
+    fn fields_with_commas_are_quoted() {
+        assert_eq!(field("a,b \"c\""), "\"a,b \"\"c\"\"\"");
+        assert_eq!(field("plain"), "plain");
+    }
 }

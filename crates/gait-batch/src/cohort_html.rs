@@ -10,7 +10,10 @@ use gait_eval::plot::{CycleCurve, GraphContext, gait_graphs};
 use crate::cohort::CohortRow;
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// Mean and SD over `curves` (same side and joint, same percent grid) point by point.
@@ -96,7 +99,10 @@ pub fn html(rows: &[CohortRow], normative: Option<&gait_eval::Normative>) -> Str
         s,
         "<p>{} videos, {} without results. Curves: mean over each video's accepted cycles; the \
          grey band is the normative data. The full table is cohort.csv.</p>",
-        rows.iter().map(|r| &r.row.name).collect::<std::collections::BTreeSet<_>>().len(),
+        rows.iter()
+            .map(|r| &r.row.name)
+            .collect::<std::collections::BTreeSet<_>>()
+            .len(),
         failed.len()
     );
     if !failed.is_empty() {
@@ -114,7 +120,11 @@ pub fn html(rows: &[CohortRow], normative: Option<&gait_eval::Normative>) -> Str
     }
     let views: std::collections::BTreeSet<&String> = by.keys().map(|(v, _)| v).collect();
     for view in views {
-        let label = if view.is_empty() { "(no view given)" } else { view };
+        let label = if view.is_empty() {
+            "(no view given)"
+        } else {
+            view
+        };
         let subjects: Vec<(&String, Vec<CycleCurve>)> = by
             .iter()
             .filter(|((v, _), _)| v == view)
@@ -133,7 +143,11 @@ pub fn html(rows: &[CohortRow], normative: Option<&gait_eval::Normative>) -> Str
             let _ = write!(
                 s,
                 "<h3>Subject {}: {} video(s) ({})</h3>",
-                escape(if subject.is_empty() { "(none)" } else { subject }),
+                escape(if subject.is_empty() {
+                    "(none)"
+                } else {
+                    subject
+                }),
                 videos.len(),
                 escape(&videos.keys().cloned().collect::<Vec<_>>().join(", "))
             );

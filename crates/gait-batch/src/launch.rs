@@ -40,7 +40,11 @@ impl Launcher {
     /// The aggregate step's arguments.
     pub fn aggregate_args(&self, out: &Path) -> Vec<OsString> {
         let mut a = self.global.clone();
-        a.extend(["batch".into(), "aggregate".into(), out.as_os_str().to_owned()]);
+        a.extend([
+            "batch".into(),
+            "aggregate".into(),
+            out.as_os_str().to_owned(),
+        ]);
         a
     }
 }

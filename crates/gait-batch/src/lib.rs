@@ -38,7 +38,10 @@ pub fn aggregate(out: &Path, plan: &Plan) -> Result<usize, BatchError> {
         .load_normative()
         .ok()
         .flatten();
-    write("cohort.html", cohort_html::html(&rows, normative.as_ref()).as_bytes())?;
+    write(
+        "cohort.html",
+        cohort_html::html(&rows, normative.as_ref()).as_bytes(),
+    )?;
     let mut failed: Vec<&str> = rows
         .iter()
         .filter(|r| r.status != "done")

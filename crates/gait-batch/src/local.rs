@@ -6,10 +6,10 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::sync::Mutex;
 
+use crate::BatchError;
 use crate::launch::{Launcher, Task};
 use crate::plan::{Plan, PlannedRow};
 use crate::state;
-use crate::BatchError;
 
 fn log_name(row: &PlannedRow, task: Task) -> String {
     match task {
@@ -29,7 +29,8 @@ fn run_all(
     on_done: &(dyn Fn(Task, bool) + Sync),
 ) -> Result<(), BatchError> {
     let logs = out.join("logs");
-    std::fs::create_dir_all(&logs).map_err(|e| BatchError::io(format!("creating {}", logs.display()), e))?;
+    std::fs::create_dir_all(&logs)
+        .map_err(|e| BatchError::io(format!("creating {}", logs.display()), e))?;
     let queue = Mutex::new(tasks.into_iter().collect::<VecDeque<_>>());
     std::thread::scope(|s| {
         for _ in 0..jobs.max(1) {

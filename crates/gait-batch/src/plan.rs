@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use gait_pipeline::PipelineConfig;
 use serde::{Deserialize, Serialize};
 
-use crate::study::{Study, StudyRow, VIEWS};
 use crate::BatchError;
+use crate::study::{Study, StudyRow, VIEWS};
 
 /// One row ready to run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -60,7 +60,13 @@ fn folder_name(row: &StudyRow) -> String {
     parts
         .join("_")
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || "-.".contains(c) { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }
 
@@ -83,11 +89,19 @@ fn row_config(study: &Study, row: &StudyRow, cache: &Path) -> Result<PipelineCon
     match row.prosthetic_side.trim() {
         "" => {}
         s @ ("left" | "right") => sets.push(format!("kinematics.prosthetic_side=\"{s}\"")),
-        other => return Err(format!("prosthetic_side `{other}` is not left, right or empty")),
+        other => {
+            return Err(format!(
+                "prosthetic_side `{other}` is not left, right or empty"
+            ));
+        }
     }
     sets.push(format!("run.cache_dir={:?}", cache.display().to_string()));
-    let config = PipelineConfig::load(file.as_deref(), &sets)
-        .map_err(|e| e.to_string().split_whitespace().collect::<Vec<_>>().join(" "))?;
+    let config = PipelineConfig::load(file.as_deref(), &sets).map_err(|e| {
+        e.to_string()
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ")
+    })?;
     Ok(config)
 }
 
@@ -116,13 +130,22 @@ impl Plan {
                 problems.push(format!("video {} not found", video.display()));
             }
             if !row.view.is_empty() && !VIEWS.contains(&row.view.as_str()) {
-                problems.push(format!("view `{}` is not one of {}", row.view, VIEWS.join(", ")));
+                problems.push(format!(
+                    "view `{}` is not one of {}",
+                    row.view,
+                    VIEWS.join(", ")
+                ));
             }
             if let Some(first) = names.get(&name) {
-                problems.push(format!("writes the same run folder `{name}` as row {}", first + 1));
+                problems.push(format!(
+                    "writes the same run folder `{name}` as row {}",
+                    first + 1
+                ));
             }
             names.entry(name.clone()).or_insert(i);
-            let config = row_config(study, row, &cache).map_err(|e| problems.push(e)).ok();
+            let config = row_config(study, row, &cache)
+                .map_err(|e| problems.push(e))
+                .ok();
             if !problems.is_empty() {
                 bad.push(format!("{what}: {}", problems.join(", ")));
                 continue;
@@ -184,7 +207,10 @@ impl Plan {
 
     /// The resolved config of `row`, as planned.
     pub fn config(out: &Path, row: &PlannedRow) -> Result<PipelineConfig, BatchError> {
-        let path = out.join("batch").join("configs").join(format!("{}.toml", row.name));
+        let path = out
+            .join("batch")
+            .join("configs")
+            .join(format!("{}.toml", row.name));
         PipelineConfig::load(Some(&path), &[]).map_err(|e| BatchError::NotABatch {
             path: out.to_path_buf(),
             message: e.to_string(),
@@ -200,4 +226,72 @@ impl Plan {
 /// The run folder of `row`.
 pub fn run_dir(out: &Path, row: &PlannedRow) -> PathBuf {
     out.join("runs").join(&row.name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn study(dir: &Path, rows: &str) -> Study {
+        std::fs::write(dir.join("a.mp4"), b"not decoded at planning").unwrap();
+        let path = dir.join("study.csv");
+        std::fs::write(&path, format!("{}\n{rows}", crate::study::HEADER.join(","))).unwrap();
+        Study::read(&path).unwrap()
+    }
+
+    #[test]
+    fn rows_get_their_folder_config_and_the_shared_cache() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = study(
+            dir.path(),
+            "a.mp4,S 01,2,left,right,,pose.backend=\"ort\"\na.mp4,S02,,,,,\n",
+        );
+        let out = dir.path().join("out");
+        let (plan, configs) = Plan::make(&s, &out, 1).unwrap();
+        let names: Vec<&str> = plan.rows.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(names, ["S_01_2_left_a", "S02_a"]);
+        assert_eq!(
+            plan.rows[0].video,
+            std::path::absolute(dir.path().join("a.mp4")).unwrap()
+        );
+        let c = &configs[0];
+        assert_eq!(c.kinematics.prosthetic_side, Some(gait_kin::Side::Right));
+        assert_eq!(
+            c.run.cache_dir,
+            Some(std::path::absolute(&out).unwrap().join("cache"))
+        );
+        assert!(configs[1].kinematics.prosthetic_side.is_none());
+        assert!(!plan.rows[0].regenerates && !plan.rows[0].gpu);
+        // What a task reads back is what was planned.
+        plan.write(&out, &configs).unwrap();
+        assert_eq!(Plan::read(&out).unwrap(), plan);
+        let back = Plan::config(&out, &plan.rows[0]).unwrap();
+        assert_eq!(
+            serde_json::to_value(&back).unwrap(),
+            serde_json::to_value(c).unwrap()
+        );
+    }
+
+    #[test]
+    fn every_bad_row_is_listed() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = study(
+            dir.path(),
+            "a.mp4,S1,,,,,\nb.mp4,S2,,,,,\na.mp4,S1,,,,,\na.mp4,S3,,top,up,,\na.mp4,S4,,,,none.toml,\n",
+        );
+        let e = Plan::make(&s, &dir.path().join("out"), 1)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("4 bad row(s)"), "{e}");
+        assert!(e.contains("row 2 (b.mp4): video"), "{e}");
+        assert!(
+            e.contains("row 3 (a.mp4): writes the same run folder `S1_a` as row 1"),
+            "{e}"
+        );
+        assert!(
+            e.contains("view `top`") && e.contains("prosthetic_side `up`"),
+            "{e}"
+        );
+        assert!(e.contains("none.toml not found"), "{e}");
+    }
 }

@@ -8,9 +8,9 @@ use std::process::Command;
 
 use serde::{Deserialize, Serialize};
 
+use crate::BatchError;
 use crate::launch::{Launcher, quote};
 use crate::plan::Plan;
-use crate::BatchError;
 
 /// What was submitted.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -74,7 +74,8 @@ pub struct SubmitOptions {
 /// take any path).
 fn script(out: &Path, name: &str, command: &str) -> Result<std::path::PathBuf, BatchError> {
     let path = out.join("batch").join(name);
-    let text = format!("#!/bin/bash\n# Written by `gait batch`; submitted with sbatch.\n{command}\n");
+    let text =
+        format!("#!/bin/bash\n# Written by `gait batch`; submitted with sbatch.\n{command}\n");
     gait_pipeline::atomic::write(&path, text.as_bytes())
         .map_err(|e| BatchError::io(format!("writing {}", path.display()), e))?;
     Ok(path)
@@ -144,7 +145,11 @@ pub fn submit(
         )),
     )?;
     let runs_script = script(out, "runs.sh", &task("--row $SLURM_ARRAY_TASK_ID"))?;
-    let mut agg_args: Vec<String> = launcher.aggregate_args(out).iter().map(|g| quote(g)).collect();
+    let mut agg_args: Vec<String> = launcher
+        .aggregate_args(out)
+        .iter()
+        .map(|g| quote(g))
+        .collect();
     agg_args.insert(0, exe.clone());
     let agg_script = script(out, "aggregate.sh", &format!("exec {}", agg_args.join(" ")))?;
 
@@ -174,7 +179,11 @@ pub fn submit(
             a.push(format!("--array={}", array_list(&split, opts.jobs)));
             let id = sbatch(&a, &parts_script)?;
             after.push(id.clone());
-            jobs.parts.push(ArrayJob { id, indices: split, gpu });
+            jobs.parts.push(ArrayJob {
+                id,
+                indices: split,
+                gpu,
+            });
             jobs.write(out)?;
         }
         let mut a = base(gpu, "run", "slurm-%A_%a.out");
@@ -183,7 +192,11 @@ pub fn submit(
             a.push(format!("--dependency=afterany:{}", after.join(":")));
         }
         let id = sbatch(&a, &runs_script)?;
-        jobs.runs.push(ArrayJob { id, indices: indices.clone(), gpu });
+        jobs.runs.push(ArrayJob {
+            id,
+            indices: indices.clone(),
+            gpu,
+        });
         jobs.write(out)?;
     }
     let runs: Vec<String> = jobs.runs.iter().map(|j| j.id.clone()).collect();

@@ -75,7 +75,10 @@ impl Study {
         let rows = match path.extension().and_then(|e| e.to_str()) {
             Some("toml") => {
                 let t: TomlStudy = toml::from_str(&text).map_err(|e| {
-                    bad(path, e.message().split_whitespace().collect::<Vec<_>>().join(" "))
+                    bad(
+                        path,
+                        e.message().split_whitespace().collect::<Vec<_>>().join(" "),
+                    )
                 })?;
                 t.row
             }
@@ -165,10 +168,19 @@ mod tests {
         let csv = write(dir.path(), "s.csv", "video,subject\na.mp4,S1\n");
         let e = Study::read(&csv).unwrap_err().to_string();
         assert!(e.contains("expected `video,subject,session"), "{e}");
-        let toml = write(dir.path(), "s.toml", "[[row]]\nvideo = \"a.mp4\"\ncolour = 1\n");
+        let toml = write(
+            dir.path(),
+            "s.toml",
+            "[[row]]\nvideo = \"a.mp4\"\ncolour = 1\n",
+        );
         let e = Study::read(&toml).unwrap_err().to_string();
         assert!(e.contains("colour"), "{e}");
         let empty = write(dir.path(), "e.csv", &(HEADER.join(",") + "\n"));
-        assert!(Study::read(&empty).unwrap_err().to_string().contains("no rows"));
+        assert!(
+            Study::read(&empty)
+                .unwrap_err()
+                .to_string()
+                .contains("no rows")
+        );
     }
 }

@@ -145,7 +145,11 @@ impl Passes<'_> {
     /// Part `part` of `parts` of the frames the run regenerates, through the
     /// regenerator only (see [`crate::runner::regenerate_part`]). The frames
     /// are dealt out in turn, so every part gets an even share of the walk.
-    pub(crate) fn regenerate_part(&mut self, part: usize, parts: usize) -> Result<(), PipelineError> {
+    pub(crate) fn regenerate_part(
+        &mut self,
+        part: usize,
+        parts: usize,
+    ) -> Result<(), PipelineError> {
         let needs_poses = self.config.regenerator.needs_poses();
         let stride = self.config.selection.stride;
         let first = self.config.input.first_frame;
@@ -158,8 +162,12 @@ impl Passes<'_> {
         match original {
             Some(o) if self.config.selection.mode == SelectionMode::Poor => {
                 let poor = self.judge(&o, &mut SelectionRecord::default())?;
-                let mine: BTreeSet<usize> = poor.iter().copied().skip(part).step_by(parts).collect();
-                let order = Order::Subset { frames: poor, stride };
+                let mine: BTreeSet<usize> =
+                    poor.iter().copied().skip(part).step_by(parts).collect();
+                let order = Order::Subset {
+                    frames: poor,
+                    stride,
+                };
                 self.pass(REGENERATED_ONLY, order, masks(&o), &|f| mine.contains(&f))?;
             }
             o => {

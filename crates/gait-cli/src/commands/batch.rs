@@ -149,11 +149,21 @@ fn submit(args: &Args, study: &Path, out: &Path, models_dir: &Path) -> Result<Ex
                 if let Task::Run { row } = t {
                     let k = done.fetch_add(1, Ordering::SeqCst) + 1;
                     let name = plan.row(row).map_or("", |r| r.name.as_str());
-                    eprintln!("[{k}/{total}] {name}: {}", if ok { "done" } else { "failed" });
+                    eprintln!(
+                        "[{k}/{total}] {name}: {}",
+                        if ok { "done" } else { "failed" }
+                    );
                 }
             };
-            gait_batch::local::run_local(out, &plan, &todo, args.jobs.unwrap_or(1), &launcher, &on_done)
-                .map_err(fail)?;
+            gait_batch::local::run_local(
+                out,
+                &plan,
+                &todo,
+                args.jobs.unwrap_or(1),
+                &launcher,
+                &on_done,
+            )
+            .map_err(fail)?;
             aggregate(out)
         }
         Executor::Slurm => {
@@ -198,7 +208,11 @@ fn exit_status(out: &Path, plan: &Plan) -> Result<ExitCode, CliError> {
         })
         .count();
     if failed == 0 {
-        eprintln!("all {} rows done; cohort.csv and cohort.html in {}", plan.rows.len(), out.display());
+        eprintln!(
+            "all {} rows done; cohort.csv and cohort.html in {}",
+            plan.rows.len(),
+            out.display()
+        );
         Ok(ExitCode::SUCCESS)
     } else {
         eprintln!(
@@ -218,7 +232,12 @@ fn aggregate(out: &Path) -> Result<ExitCode, CliError> {
 
 /// One task: a part of a split row's regeneration, or a row's run (as `gait run`). A failure is
 /// recorded in the run folder before the task exits.
-fn task(out: &Path, index: usize, part: Option<usize>, models_dir: &Path) -> Result<ExitCode, CliError> {
+fn task(
+    out: &Path,
+    index: usize,
+    part: Option<usize>,
+    models_dir: &Path,
+) -> Result<ExitCode, CliError> {
     let plan = Plan::read(out).map_err(fail)?;
     let row = plan
         .row(index)
@@ -259,7 +278,8 @@ fn status(out: &Path) -> Result<ExitCode, CliError> {
     let in_queue = |index: usize| {
         queued.iter().find_map(|(job, task, st)| {
             let runs = jobs.runs.iter().any(|j| &j.id == job) && *task == Some(index);
-            let parts = jobs.parts.iter().any(|j| &j.id == job) && task.is_some_and(|t| t / k == index);
+            let parts =
+                jobs.parts.iter().any(|j| &j.id == job) && task.is_some_and(|t| t / k == index);
             (runs || parts).then(|| st.to_lowercase())
         })
     };
@@ -279,17 +299,31 @@ fn status(out: &Path) -> Result<ExitCode, CliError> {
             detail.clear();
         }
         *counts.entry(st.name()).or_insert(0) += 1;
-        println!("{:<5} {:<40} {:<9} {detail}", r.index + 1, r.name, st.name());
+        println!(
+            "{:<5} {:<40} {:<9} {detail}",
+            r.index + 1,
+            r.name,
+            st.name()
+        );
     }
     let summary: Vec<String> = counts.iter().map(|(k, v)| format!("{v} {k}")).collect();
     let ids = jobs.ids();
     let sacct = slurm::accounted(&ids)
-        .map(|v| v.iter().map(|(j, s)| format!("{j} {s}")).collect::<Vec<_>>().join(", "))
+        .map(|v| {
+            v.iter()
+                .map(|(j, s)| format!("{j} {s}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        })
         .filter(|s| !s.is_empty());
     eprintln!(
         "{}{}{}",
         summary.join(", "),
-        if ids.is_empty() { String::new() } else { format!("; slurm jobs {}", ids.join(" ")) },
+        if ids.is_empty() {
+            String::new()
+        } else {
+            format!("; slurm jobs {}", ids.join(" "))
+        },
         sacct.map_or(String::new(), |s| format!(" (sacct: {s})"))
     );
     Ok(ExitCode::SUCCESS)
