@@ -249,7 +249,10 @@ mod tests {
             sd: vec![1.0; 3],
             n_cycles: 2,
         };
-        assert_eq!(peak_and_range(std::slice::from_ref(&c), "knee"), (62.5, 57.5));
+        assert_eq!(
+            peak_and_range(std::slice::from_ref(&c), "knee"),
+            (62.5, 57.5)
+        );
         assert!(peak_and_range(&[c], "hip").0.is_nan());
     }
 
