@@ -13,3 +13,7 @@ bash tools/review/setup_puppeteer.sh >/dev/null
 eval "export $(bash tools/batch/slurm.sh up)"
 trap 'bash tools/batch/slurm.sh down' EXIT
 cargo test --workspace
+# Every input parser under mutated real files for a bounded time (issue 21); a crash fails the
+# run, with its input saved under target/fuzz-crashes/ and printed in hex.
+cargo build -p gait-fuzz
+target/debug/gait-fuzz run --seconds "${GAIT_FUZZ_SECONDS:-10}"

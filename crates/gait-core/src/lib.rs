@@ -13,9 +13,11 @@ mod edge;
 mod error;
 mod frame;
 pub mod geometry;
+pub mod guard;
 pub mod keypoint;
 pub mod openpose_layout;
 mod person;
+pub mod pickle_guard;
 mod pose;
 mod stage;
 

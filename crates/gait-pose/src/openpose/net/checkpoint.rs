@@ -3,7 +3,7 @@
 //! which `body_pose_model.pth` may well be in) and `.safetensors`.
 
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader, Read};
+use std::io::Read;
 use std::path::Path;
 
 use candle_core::pickle::{Object, Stack, TensorInfo};
@@ -29,12 +29,16 @@ pub(crate) fn read_tensors(path: &Path) -> Result<HashMap<String, Tensor>, Weigh
         .and_then(|mut f| f.read(&mut head))
         .map_err(read_err)?;
     let head = &head[..n];
+    // candle's readers index into what the file declares and can panic on a malformed one.
+    let guarded = |f: fn(&Path) -> Result<HashMap<String, Tensor>, WeightsError>| {
+        gait_core::guard::quietly("reading the checkpoint", || f(path)).map_err(read_err)?
+    };
     let tensors = if path.extension().is_some_and(|e| e == "safetensors") {
         candle_core::safetensors::load(path, &Device::Cpu).map_err(read_err)?
     } else if head.starts_with(&ZIP_MAGIC) {
-        read_zip_pth(path)?
+        guarded(read_zip_pth)?
     } else if head == LEGACY_MAGIC {
-        read_legacy_pth(path)?
+        guarded(read_legacy_pth)?
     } else {
         return Err(WeightsError::Read(
             "neither a PyTorch checkpoint (.pth, zip or legacy format) nor .safetensors".into(),
@@ -53,8 +57,52 @@ pub(crate) fn read_tensors(path: &Path) -> Result<HashMap<String, Tensor>, Weigh
         .collect()
 }
 
+/// The entries of a zip checkpoint with their sizes, after checking the pickle's declared
+/// lengths (candle allocates them before reading).
+fn zip_entries(path: &Path) -> Result<HashMap<String, u64>, WeightsError> {
+    let file = std::fs::File::open(path).map_err(read_err)?;
+    let mut zip = zip::ZipArchive::new(file).map_err(read_err)?;
+    let mut sizes = HashMap::new();
+    for k in 0..zip.len() {
+        let mut entry = zip.by_index(k).map_err(read_err)?;
+        let name = entry.name().map_err(read_err)?.to_string();
+        if name.ends_with("data.pkl") {
+            let mut pickle = Vec::new();
+            // A pickle of tensor names and shapes is small; a larger one is not a checkpoint.
+            (&mut entry)
+                .take(MAX_PICKLE)
+                .read_to_end(&mut pickle)
+                .map_err(read_err)?;
+            gait_core::pickle_guard::check(&pickle).map_err(read_err)?;
+        }
+        sizes.insert(name, entry.size());
+    }
+    Ok(sizes)
+}
+
+/// The largest pickle of names and shapes read from a zip checkpoint.
+const MAX_PICKLE: u64 = 256 << 20;
+
 fn read_zip_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
+    let sizes = zip_entries(path)?;
     let pth = candle_core::pickle::PthTensors::new(path, None).map_err(read_err)?;
+    // A tensor's declared shape must fit in its storage entry before candle allocates it.
+    for (name, info) in pth.tensor_infos() {
+        let need = info
+            .layout
+            .shape()
+            .elem_count()
+            .checked_mul(info.dtype.size_in_bytes())
+            .and_then(|n| n.checked_add(info.layout.start_offset() * info.dtype.size_in_bytes()));
+        let have = sizes.get(&info.path).copied().unwrap_or(0);
+        if need.is_none_or(|n| n as u64 > have) {
+            return Err(WeightsError::Read(format!(
+                "tensor `{name}` declares shape {:?} but its storage `{}` holds {have} bytes",
+                info.layout.dims(),
+                info.path
+            )));
+        }
+    }
     let mut out = HashMap::new();
     for name in pth.tensor_infos().keys() {
         let t = pth
@@ -71,7 +119,9 @@ fn read_zip_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
 /// pickled list of storage keys, then each storage as a little-endian u64
 /// element count followed by its raw bytes.
 fn read_legacy_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
-    let mut r = BufReader::new(std::fs::File::open(path).map_err(read_err)?);
+    // In memory, so that each pickle's declared lengths can be checked before candle reads it.
+    let bytes = std::fs::read(path).map_err(read_err)?;
+    let mut r = std::io::Cursor::new(bytes.as_slice());
     // Skipped, not parsed: candle's unpickler cannot take a 10-byte long.
     let mut magic = [0u8; LEGACY_MAGIC.len()];
     r.read_exact(&mut magic).map_err(read_err)?;
@@ -150,7 +200,9 @@ fn read_legacy_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError>
     Ok(out)
 }
 
-fn unpickle<R: BufRead>(r: &mut R) -> Result<Object, WeightsError> {
+fn unpickle(r: &mut std::io::Cursor<&[u8]>) -> Result<Object, WeightsError> {
+    let at = (r.position() as usize).min(r.get_ref().len());
+    gait_core::pickle_guard::check(&r.get_ref()[at..]).map_err(read_err)?;
     let mut stack = Stack::empty();
     stack.read_loop(r).map_err(read_err)?;
     stack.finalize().map_err(read_err)

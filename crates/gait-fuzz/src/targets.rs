@@ -1,0 +1,265 @@
+//! One fuzz target per input parser: the bytes go where a user's file would (a file of the
+//! right name, or the parser's byte entry) and whatever the parser accepts is used as the
+//! program would use it next. An error is a pass; a panic, abort, huge allocation or hang is a
+//! crash (see [`crate::engine`]).
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use gait_core::PoseSequence;
+
+/// A parser under test.
+pub struct Target {
+    pub name: &'static str,
+    /// Seed files (relative to the repository), or folders whose files with `ext` are seeds.
+    pub seeds: &'static [&'static str],
+    pub ext: &'static str,
+    pub run: fn(&Scratch, &[u8]),
+}
+
+/// A private folder for the files a target writes (on /dev/shm where there is one).
+pub struct Scratch {
+    dir: tempfile::TempDir,
+}
+
+impl Scratch {
+    pub fn new() -> std::io::Result<Self> {
+        let shm = Path::new("/dev/shm");
+        let dir = if shm.is_dir() {
+            tempfile::tempdir_in(shm)?
+        } else {
+            tempfile::tempdir()?
+        };
+        Ok(Scratch { dir })
+    }
+
+    /// Writes `bytes` as `name` in the scratch folder.
+    pub fn file(&self, name: &str, bytes: &[u8]) -> PathBuf {
+        let p = self.dir.path().join(name);
+        if let Some(parent) = p.parent() {
+            let _ = std::fs::create_dir_all(parent);
+        }
+        let _ = std::fs::write(&p, bytes);
+        p
+    }
+
+    pub fn path(&self) -> &Path {
+        self.dir.path()
+    }
+}
+
+/// The sample's subject-tracked keypoints (frames 59-192 are the walker), for the targets that
+/// check their input against keypoints.
+fn sample() -> &'static PoseSequence {
+    static SEQ: OnceLock<PoseSequence> = OnceLock::new();
+    SEQ.get_or_init(|| {
+        let p = crate::repo().join("tests/data/sample-subject/keypoints.csv");
+        let f = std::fs::File::open(p).expect("tests/data/sample-subject/keypoints.csv");
+        gait_core::dlc::read(f, None, 30.0).expect("the sample keypoints parse")
+    })
+}
+
+fn kin_config() -> gait_kin::KinematicsConfig {
+    gait_kin::KinematicsConfig {
+        frame_size: Some([1768, 994]),
+        ..Default::default()
+    }
+}
+
+fn dlc_csv(_: &Scratch, b: &[u8]) {
+    if let Ok(seq) = gait_core::dlc::read(b, None, 30.0) {
+        // Hostile numbers must get through the whole analysis too.
+        let _ = gait_kin::analyse(&seq, &Default::default(), &kin_config());
+    }
+}
+
+fn openpose_json(s: &Scratch, b: &[u8]) {
+    let dir = s.path().join("openpose");
+    let _ = std::fs::remove_dir_all(&dir);
+    s.file("openpose/walk_000000000000_keypoints.json", b);
+    s.file("openpose/walk_000000000001_keypoints.json", b);
+    let _ = gait_eval::openpose::read_dir(&dir, 30.0);
+}
+
+fn pipeline_toml(s: &Scratch, b: &[u8]) {
+    let _ = gait_pipeline::PipelineConfig::load(Some(&s.file("pipeline.toml", b)), &[]);
+}
+
+fn run_json(s: &Scratch, b: &[u8]) {
+    let _ = gait_pipeline::PipelineConfig::load(Some(&s.file("run.json", b)), &[]);
+}
+
+fn corrections(s: &Scratch, b: &[u8]) {
+    let path = s.file("corrections.toml", b);
+    if let Ok(c) = gait_kin::Corrections::read(&path)
+        && c.validate_file(sample(), &path).is_ok()
+    {
+        let _ = gait_kin::analyse_corrected(
+            sample(),
+            &Default::default(),
+            &kin_config(),
+            &c,
+            &path,
+            String::new(),
+        );
+    }
+}
+
+fn study_csv(s: &Scratch, b: &[u8]) {
+    let _ = gait_batch::Study::read(&s.file("study.csv", b));
+}
+
+fn study_toml(s: &Scratch, b: &[u8]) {
+    let _ = gait_batch::Study::read(&s.file("study.toml", b));
+}
+
+fn events_csv(s: &Scratch, b: &[u8]) {
+    let _ = gait_kin::events::read_csv(&s.file("events.csv", b));
+}
+
+fn normative_csv(s: &Scratch, b: &[u8]) {
+    let p = s.file("lab.csv", b);
+    let _ = gait_eval::Normative::load(&p.display().to_string());
+}
+
+fn tflite(_: &Scratch, b: &[u8]) {
+    let _ = gait_tflite::Graph::parse(b);
+}
+
+fn safetensors(_: &Scratch, b: &[u8]) {
+    let _ = candle_core::safetensors::load_buffer(b, &candle_core::Device::Cpu);
+}
+
+fn pth(s: &Scratch, b: &[u8]) {
+    let _ = gait_pose::openpose::net::read_checkpoint(&s.file("model.pth", b));
+}
+
+fn clip_merges(_: &Scratch, b: &[u8]) {
+    if let Ok(t) = gait_diffuse::ClipTokenizer::from_merges(&String::from_utf8_lossy(b)) {
+        let _ = t.encode("a person walking with intact legs, full body, photo");
+    }
+}
+
+fn image(s: &Scratch, b: &[u8]) {
+    let p = s.file("frame.png", b);
+    if let Ok(info) = gait_pipeline::input::InputInfo::open(&p)
+        && let Ok(mut frames) = info.frames()
+    {
+        let _ = frames.next_frame();
+    }
+}
+
+fn video(s: &Scratch, b: &[u8]) {
+    let p = s.file("clip.mp4", b);
+    if let Ok(info) = gait_pipeline::input::InputInfo::open(&p)
+        && let Ok(mut frames) = info.frames()
+    {
+        while let Ok(Some(_)) = frames.next_frame() {}
+    }
+}
+
+/// Every target, in the order the runner takes them.
+pub const TARGETS: &[Target] = &[
+    Target {
+        name: "dlc_csv",
+        seeds: &["fuzz/seeds/dlc_csv"],
+        ext: "csv",
+        run: dlc_csv,
+    },
+    Target {
+        name: "openpose_json",
+        seeds: &["crates/gait-eval/tests/fixtures/metrics/pred_openpose"],
+        ext: "json",
+        run: openpose_json,
+    },
+    Target {
+        name: "pipeline_toml",
+        seeds: &["configs"],
+        ext: "toml",
+        run: pipeline_toml,
+    },
+    Target {
+        name: "run_json",
+        seeds: &["fuzz/seeds/run_json"],
+        ext: "json",
+        run: run_json,
+    },
+    Target {
+        name: "corrections",
+        seeds: &["fuzz/seeds/corrections"],
+        ext: "toml",
+        run: corrections,
+    },
+    Target {
+        name: "study_csv",
+        seeds: &["fuzz/seeds/study"],
+        ext: "csv",
+        run: study_csv,
+    },
+    Target {
+        name: "study_toml",
+        seeds: &["fuzz/seeds/study"],
+        ext: "toml",
+        run: study_toml,
+    },
+    Target {
+        name: "events_csv",
+        seeds: &[
+            "tests/data/sample-events/events.csv",
+            "tests/data/fukuchi2018/events.csv",
+        ],
+        ext: "csv",
+        run: events_csv,
+    },
+    Target {
+        name: "normative_csv",
+        seeds: &["crates/gait-eval/data/normative/schwartz2008_free.csv"],
+        ext: "csv",
+        run: normative_csv,
+    },
+    Target {
+        name: "tflite",
+        seeds: &["target/models/blazepose/selfie_segmentation.tflite"],
+        ext: "tflite",
+        run: tflite,
+    },
+    Target {
+        name: "safetensors",
+        seeds: &["crates/gait-edge/tests/fixtures/hed/expected.safetensors"],
+        ext: "safetensors",
+        run: safetensors,
+    },
+    Target {
+        name: "pth",
+        seeds: &["crates/gait-pose/tests/fixtures/openpose/net"],
+        ext: "pth",
+        run: pth,
+    },
+    Target {
+        name: "clip_merges",
+        seeds: &["fuzz/seeds/clip_merges"],
+        ext: "txt",
+        run: clip_merges,
+    },
+    Target {
+        name: "image",
+        seeds: &[
+            "crates/gait-edge/tests/fixtures/hed/annotator_safe.png",
+            "crates/gait-edge/tests/fixtures/hed/annotator.png",
+            "fuzz/seeds/image",
+        ],
+        ext: "png",
+        run: image,
+    },
+    Target {
+        name: "video",
+        seeds: &["fuzz/seeds/video"],
+        ext: "mp4",
+        run: video,
+    },
+];
+
+/// The target called `name`.
+pub fn target(name: &str) -> Option<&'static Target> {
+    TARGETS.iter().find(|t| t.name == name)
+}
