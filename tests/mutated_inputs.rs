@@ -9,14 +9,15 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use common::{gait, models_dir, sample_video};
-use gait_fuzz::mutate::{Rng, variant};
+use gait_fuzz::mutate::{Rng, numbers_only, variant};
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// Exit 0, or 2 with one `error:` line; never a panic; no leftover temporary files in `out`.
-fn check(cmd: &mut Command, what: &str, out: &Path) {
+/// Returns the exit code.
+fn check(cmd: &mut Command, what: &str, out: &Path) -> i32 {
     let o = cmd.output().expect("gait runs");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("panicked"), "{what}: {err}");
@@ -35,6 +36,7 @@ fn check(cmd: &mut Command, what: &str, out: &Path) {
         }
         other => panic!("{what}: exit {other:?}: {err}"),
     }
+    let code = o.status.code().unwrap_or(-1);
     if out.is_dir() {
         for e in walk(out) {
             let name = e.file_name().unwrap().to_string_lossy().to_string();
@@ -45,6 +47,21 @@ fn check(cmd: &mut Command, what: &str, out: &Path) {
             );
         }
     }
+    code
+}
+
+/// Both outcomes must occur: mutants that still parse and mutants that are refused; otherwise
+/// the test would not be testing what it says.
+fn both_outcomes(codes: &[i32], what: &str) {
+    eprintln!(
+        "{what}: {} accepted, {} refused",
+        codes.iter().filter(|&&c| c == 0).count(),
+        codes.iter().filter(|&&c| c == 2).count()
+    );
+    assert!(
+        codes.contains(&0) && codes.contains(&2),
+        "{what}: exit codes {codes:?}"
+    );
 }
 
 fn walk(dir: &Path) -> Vec<PathBuf> {
@@ -60,7 +77,8 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
-/// `n` mutated copies of `seed` written into `dir` as `stem-K.ext`.
+/// `n` mutated copies of `seed` written into `dir` as `mutant-K.ext`: every third one with only
+/// numbers replaced (extreme, NaN, inf), the others with any mutation.
 fn mutants(dir: &Path, seed: &Path, n: usize, rng: u64) -> Vec<PathBuf> {
     let bytes = std::fs::read(seed).unwrap();
     let ext = seed.extension().unwrap().to_string_lossy().to_string();
@@ -68,7 +86,12 @@ fn mutants(dir: &Path, seed: &Path, n: usize, rng: u64) -> Vec<PathBuf> {
     (0..n)
         .map(|k| {
             let p = dir.join(format!("mutant-{k}.{ext}"));
-            std::fs::write(&p, variant(&mut r, &bytes, &bytes)).unwrap();
+            let m = if k % 3 == 0 {
+                numbers_only(&mut r, &bytes)
+            } else {
+                variant(&mut r, &bytes, &bytes)
+            };
+            std::fs::write(&p, m).unwrap();
             p
         })
         .collect()
@@ -78,9 +101,10 @@ fn mutants(dir: &Path, seed: &Path, n: usize, rng: u64) -> Vec<PathBuf> {
 fn gait_kin_on_mutated_keypoints_and_corrections() {
     let work = tempfile::tempdir().unwrap();
     let seed = repo().join("fuzz/seeds/dlc_csv/walk_frames_100_129.csv");
+    let mut codes = Vec::new();
     for (k, file) in mutants(work.path(), &seed, 25, 1).iter().enumerate() {
         let out = work.path().join(format!("kin-{k}"));
-        check(
+        codes.push(check(
             gait()
                 .args(["kin", "--fps", "30", "--keypoints"])
                 .arg(file)
@@ -89,13 +113,15 @@ fn gait_kin_on_mutated_keypoints_and_corrections() {
                 .args(["--set", "report.pdf=false"]),
             &format!("gait kin --keypoints {}", file.display()),
             &out,
-        );
+        ));
     }
+    both_outcomes(&codes, "gait kin --keypoints");
     let keypoints = repo().join("tests/data/sample-subject/keypoints.csv");
     let seed = repo().join("fuzz/seeds/corrections/readme_example.toml");
+    let mut codes = Vec::new();
     for (k, file) in mutants(work.path(), &seed, 25, 2).iter().enumerate() {
         let out = work.path().join(format!("corr-{k}"));
-        check(
+        codes.push(check(
             gait()
                 .args(["kin", "--fps", "30", "--keypoints"])
                 .arg(&keypoints)
@@ -106,8 +132,9 @@ fn gait_kin_on_mutated_keypoints_and_corrections() {
                 .args(["--set", "report.pdf=false", "--set", "export.formats=[]"]),
             &format!("gait kin --corrections {}", file.display()),
             &out,
-        );
+        ));
     }
+    both_outcomes(&codes, "gait kin --corrections");
 }
 
 #[test]
@@ -115,9 +142,10 @@ fn gait_eval_on_mutated_truth() {
     let work = tempfile::tempdir().unwrap();
     let pred = repo().join("tests/data/sample-subject/keypoints.csv");
     let seed = repo().join("fuzz/seeds/dlc_csv/walk_frames_100_129.csv");
+    let mut codes = Vec::new();
     for (k, file) in mutants(work.path(), &seed, 20, 3).iter().enumerate() {
         let out = work.path().join(format!("eval-{k}"));
-        check(
+        codes.push(check(
             gait()
                 .args(["eval", "--truth"])
                 .arg(file)
@@ -127,17 +155,19 @@ fn gait_eval_on_mutated_truth() {
                 .arg(&out),
             &format!("gait eval --truth {}", file.display()),
             &out,
-        );
+        ));
     }
+    both_outcomes(&codes, "gait eval --truth");
 }
 
 #[test]
 fn gait_run_on_mutated_configs() {
     let work = tempfile::tempdir().unwrap();
     let seed = repo().join("configs/default.toml");
+    let mut codes = Vec::new();
     for (k, file) in mutants(work.path(), &seed, 12, 4).iter().enumerate() {
         let out = work.path().join(format!("run-{k}"));
-        check(
+        codes.push(check(
             gait()
                 .arg("--models-dir")
                 .arg(models_dir())
@@ -156,8 +186,9 @@ fn gait_run_on_mutated_configs() {
                 .args(["--set", "report.pdf=false", "--set", "report.overlay=false"]),
             &format!("gait run --config {}", file.display()),
             &out,
-        );
+        ));
     }
+    both_outcomes(&codes, "gait run --config");
 }
 
 /// `gait review` refuses a mutated corrections.toml with one line, or starts (and is stopped).
@@ -166,7 +197,10 @@ fn gait_review_on_mutated_corrections() {
     let work = tempfile::tempdir().unwrap();
     let keypoints = repo().join("tests/data/sample-subject/keypoints.csv");
     let seed = repo().join("fuzz/seeds/corrections/remove_and_swaps.toml");
-    for file in mutants(work.path(), &seed, 15, 5) {
+    let (mut started, mut refused) = (0, 0);
+    // The seed itself first: a review that starts is one of the outcomes checked.
+    let files = std::iter::once(seed.clone()).chain(mutants(work.path(), &seed, 15, 5));
+    for file in files {
         let mut child = gait()
             .args(["review", "--fps", "30", "--keypoints"])
             .arg(&keypoints)
@@ -178,13 +212,15 @@ fn gait_review_on_mutated_corrections() {
             .unwrap();
         let mut line = String::new();
         use std::io::BufRead;
-        let started = std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line);
-        if started.is_ok_and(|n| n > 0) {
+        let got = std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line);
+        if got.is_ok_and(|n| n > 0) {
             assert!(line.starts_with("http://127.0.0.1:"), "{line}");
             let _ = child.kill();
             let _ = child.wait();
+            started += 1;
             continue;
         }
+        refused += 1;
         let o = child.wait_with_output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{}: {err}", file.display());
@@ -192,4 +228,9 @@ fn gait_review_on_mutated_corrections() {
         assert_eq!(errors, 1, "{err}");
         assert!(!err.contains("panicked"), "{err}");
     }
+    eprintln!("gait review --corrections: {started} started, {refused} refused");
+    assert!(
+        started > 0 && refused > 0,
+        "{started} started, {refused} refused"
+    );
 }

@@ -122,6 +122,16 @@ pub fn variant(rng: &mut Rng, seed: &[u8], other: &[u8]) -> Vec<u8> {
     data
 }
 
+/// `seed` with 1 to 3 of its numbers replaced by extreme ones, the structure left intact: the
+/// inputs that reach past the parser into the analysis.
+pub fn numbers_only(rng: &mut Rng, seed: &[u8]) -> Vec<u8> {
+    let mut data = seed.to_vec();
+    for _ in 0..1 + rng.below(3) {
+        replace_number(rng, &mut data);
+    }
+    data
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
