@@ -29,6 +29,7 @@ pub mod corrections;
 pub mod cycles;
 pub mod direction;
 pub mod events;
+mod input_check;
 pub mod likelihood;
 pub mod one_euro;
 mod output;
@@ -57,6 +58,8 @@ pub use corrections::{
 pub use cycles::{CycleCurve, Stride};
 pub use direction::Direction;
 pub use events::{Event, EventDetector, EventKind, ZeniRefined};
+pub use input_check::MAX_FRAME;
+use input_check::check_input;
 pub use likelihood::{KeypointGate, LikelihoodThreshold};
 pub use output::write_outputs;
 pub use quality::{CycleQuality, Reason, SideCounts};
@@ -325,35 +328,6 @@ fn run_chain(
         warnings,
         filtered: t.to_sequence(),
     })
-}
-
-fn check_input(
-    seq: &PoseSequence,
-    post: &PostprocessConfig,
-    kin: &KinematicsConfig,
-) -> Result<(), KinError> {
-    let fps = seq.fps;
-    if !(fps.is_finite() && fps > 0.0) {
-        return Err(KinError::BadInput(format!(
-            "frame rate {fps} is not a positive number"
-        )));
-    }
-    post.validate(fps)?;
-    kin.validate()?;
-    if seq.frames.len() != seq.poses.len() {
-        return Err(KinError::BadInput(
-            "frames and poses differ in length".into(),
-        ));
-    }
-    if let (Some(lo), Some(hi)) = (seq.frames.iter().min(), seq.frames.iter().max())
-        && hi - lo > 10 * seq.frames.len() + 10_000
-    {
-        return Err(KinError::BadInput(format!(
-            "frame numbers {lo}..{hi} are too sparse for {} poses",
-            seq.len()
-        )));
-    }
-    Ok(())
 }
 
 /// The keypoints after cleaning, plus what the quality rules need from before it.
