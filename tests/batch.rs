@@ -34,6 +34,27 @@ fn slurm_conf() -> &'static str {
     })
 }
 
+/// `frames` frames of the sample from `start` seconds, re-encoded (H.264) into `out`.
+fn cut(start: &str, frames: &str, out: &Path) {
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-ss", start, "-i"])
+        .arg(sample_video())
+        .args([
+            "-frames:v",
+            frames,
+            "-an",
+            "-c:v",
+            "libx264",
+            "-preset",
+            "veryfast",
+        ])
+        .args(["-pix_fmt", "yuv420p"])
+        .arg(out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
 /// Three clips of the sample, each with the walker's whole walk (two cycles a side at least,
 /// so the cohort has curves), and a truncated copy, with a study file.
 fn clips() -> &'static Path {
@@ -46,23 +67,7 @@ fn clips() -> &'static Path {
             ("c", "1.8", "145"),
         ] {
             let out = dir.join(format!("clip_{name}.mp4"));
-            let status = Command::new("ffmpeg")
-                .args(["-v", "error", "-y", "-ss", start, "-i"])
-                .arg(sample_video())
-                .args([
-                    "-frames:v",
-                    frames,
-                    "-an",
-                    "-c:v",
-                    "libx264",
-                    "-preset",
-                    "veryfast",
-                ])
-                .args(["-pix_fmt", "yuv420p"])
-                .arg(&out)
-                .status()
-                .unwrap();
-            assert!(status.success());
+            cut(start, frames, &out);
         }
         let bytes = std::fs::read(dir.join("clip_a.mp4")).unwrap();
         std::fs::write(dir.join("corrupt.mp4"), &bytes[..20_000]).unwrap();
@@ -299,23 +304,7 @@ fn a_cancelled_batch_reruns_only_its_unfinished_rows() {
 fn a_video_split_over_array_tasks_gives_the_unsplit_run() {
     let work = tempfile::tempdir().unwrap();
     let clip = work.path().join("clip.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-ss", "4.0", "-i"])
-        .arg(sample_video())
-        .args([
-            "-frames:v",
-            "9",
-            "-an",
-            "-c:v",
-            "libx264",
-            "-preset",
-            "veryfast",
-        ])
-        .args(["-pix_fmt", "yuv420p"])
-        .arg(&clip)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    cut("4.0", "9", &clip);
     let mut sets: Vec<String> = common::tiny_controlnet_sets();
     sets.extend(["report.pdf=false".into(), "report.overlay=false".into()]);
     let study = work.path().join("study.toml");
