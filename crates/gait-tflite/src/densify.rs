@@ -24,6 +24,9 @@ pub struct Sparsity {
     pub dim_metadata: Vec<DimMeta>,
 }
 
+/// The largest dense tensor a sparse one may expand to (BlazePose's are under 10 MB).
+pub const MAX_DENSE_BYTES: usize = 256 << 20;
+
 impl Sparsity {
     /// Scatters `values` (stored elements in traversal order) into a dense
     /// row-major tensor of `shape`; each element is `elem` bytes wide.
@@ -54,7 +57,12 @@ impl Sparsity {
                 }
             }
         }
-        let total: usize = shape.iter().product();
+        // The dense size is declared by the file: refused past the limit before allocating it.
+        let bytes = shape
+            .iter()
+            .try_fold(elem, |a, &d| a.checked_mul(d))
+            .filter(|&b| b <= MAX_DENSE_BYTES)
+            .ok_or_else(|| bad("dense size (shape times element size) over the 256 MiB limit"))?;
         let mut state = State {
             sp: self,
             shape,
@@ -63,7 +71,7 @@ impl Sparsity {
             values,
             next: 0,
             idx: vec![0; n + k],
-            out: vec![0u8; total * elem],
+            out: vec![0u8; bytes],
         };
         state.populate(0, 0)?;
         Ok(state.out)

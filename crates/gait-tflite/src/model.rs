@@ -400,8 +400,8 @@ impl Graph {
                 data = Some(sparsity(sp)?.densify(&shape, raw, elem)?);
             }
             if let (Some(d), Some(elem)) = (data.as_ref(), dtype.size()) {
-                let want = shape.iter().product::<usize>() * elem;
-                if d.len() != want {
+                let want = shape.iter().try_fold(elem, |a, &n| a.checked_mul(n));
+                if want != Some(d.len()) {
                     return Err(TfliteError::Malformed(format!(
                         "tensor {name}: {} bytes of data for shape {shape:?}",
                         d.len()
