@@ -23,8 +23,9 @@ impl From<gait_core::StageError> for CliError {
 }
 
 /// The longest error line: a parser may quote the offending input, which a hostile file makes
-/// arbitrarily long (a TOML line of 200,000 brackets).
-const MAX_LINE: usize = 600;
+/// arbitrarily long (a TOML line of 200,000 brackets). Long enough for the longest real
+/// message (`gait models fetch` listing every file to download by hand).
+const MAX_LINE: usize = 8192;
 
 /// Messages from libraries can span lines (e.g. TOML errors); the CLI
 /// promises one line, of readable length.
