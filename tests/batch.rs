@@ -18,19 +18,8 @@ use common::{fails_with, gait, models_dir, run_ok, sample_video};
 fn slurm_conf() -> &'static str {
     static CONF: OnceLock<String> = OnceLock::new();
     CONF.get_or_init(|| {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        let out = Command::new("bash")
-            .arg(root.join("tools/batch/slurm.sh"))
-            .arg("up")
-            .output()
-            .expect("bash runs");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8(out.stdout).unwrap();
-        text.trim().strip_prefix("SLURM_CONF=").unwrap().to_string()
+        let text = common::tool_output("tools/batch/slurm.sh", &["up"]);
+        text.strip_prefix("SLURM_CONF=").unwrap().to_string()
     })
 }
 

@@ -100,17 +100,7 @@ impl Drop for Server {
 }
 
 fn node_modules() -> String {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let out = Command::new("bash")
-        .arg(root.join("tools/review/setup_puppeteer.sh"))
-        .output()
-        .expect("bash runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap().trim().to_string()
+    common::tool_output("tools/review/setup_puppeteer.sh", &[])
 }
 
 /// angles.csv as `column -> cells` (cells as written: 6 decimals, empty when undefined).
