@@ -215,6 +215,18 @@ fn softmax_columns(st: &mut [f32], scale: f32, inv: &mut [f32]) {
         // SAFETY: the feature was just detected.
         return unsafe { softmax_columns_avx512(st, scale, inv) };
     }
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        // SAFETY: the features were just detected.
+        return unsafe { softmax_columns_avx2(st, scale, inv) };
+    }
+    softmax_columns_body(st, scale, inv)
+}
+
+/// The plain body compiled for AVX2 and FMA (branch-free `exp`, so it vectorises).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn softmax_columns_avx2(st: &mut [f32], scale: f32, inv: &mut [f32]) {
     softmax_columns_body(st, scale, inv)
 }
 
@@ -253,6 +265,7 @@ unsafe fn softmax_columns_avx512(st: &mut [f32], scale: f32, inv: &mut [f32]) {
     }
 }
 
+#[inline(always)]
 fn softmax_columns_body(st: &mut [f32], scale: f32, inv: &mut [f32]) {
     let mut max = [f32::NEG_INFINITY; NR];
     for row in st.chunks_exact(NR) {

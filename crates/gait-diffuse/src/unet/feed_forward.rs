@@ -86,6 +86,18 @@ fn geglu(h: &[f32], g: &mut [f32]) {
         // SAFETY: the feature was just detected.
         return unsafe { geglu_avx512(h, g) };
     }
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        // SAFETY: the features were just detected.
+        return unsafe { geglu_avx2(h, g) };
+    }
+    geglu_body(h, g)
+}
+
+/// The same compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn geglu_avx2(h: &[f32], g: &mut [f32]) {
     geglu_body(h, g)
 }
 

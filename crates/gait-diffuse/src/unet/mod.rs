@@ -17,6 +17,12 @@ mod model;
 mod norm;
 mod resnet;
 mod sgemm;
+#[cfg(target_arch = "x86_64")]
+mod tile_avx2;
+#[cfg(target_arch = "aarch64")]
+mod tile_neon;
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+mod tile_quarters;
 mod transformer;
 mod winograd;
 

@@ -21,16 +21,27 @@ const MC: usize = 256;
 /// Columns of B packed at a time (KC x NC floats, ~3 MiB, in L3).
 const NC: usize = 4096;
 
-/// True when this CPU can run [`sgemm`].
+/// True when this CPU has a vector [`Tile`] kernel, so [`sgemm`] beats `gemm`.
 pub(crate) fn available() -> bool {
+    vector_tile().is_some()
+}
+
+/// The tile kernel for this CPU's widest vectors, if we have one.
+fn vector_tile() -> Option<Tile> {
     #[cfg(target_arch = "x86_64")]
     {
-        is_x86_feature_detected!("avx512f")
+        if is_x86_feature_detected!("avx512f") {
+            return Some(tile_avx512);
+        }
+        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+            return Some(super::tile_avx2::tile);
+        }
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
+    #[cfg(target_arch = "aarch64")]
+    if std::arch::is_aarch64_feature_detected!("neon") {
+        return Some(super::tile_neon::tile);
     }
+    None
 }
 
 /// `dst (m x n, row stride dst_rs) = [dst +] lhs (m x k) @ rhs (k x n)`,
@@ -227,15 +238,11 @@ pub(crate) unsafe fn pack<const W: usize>(
 pub(crate) type Tile =
     unsafe fn(usize, *const f32, *const f32, *mut f32, isize, bool, usize, usize);
 
-/// This CPU's tile kernel: AVX-512 where [`available`], else plain code the
-/// compiler vectorises for the baseline target. Callers look it up once per
-/// product, not per tile.
+/// This CPU's tile kernel: AVX-512, AVX2+FMA or NEON where the CPU has them,
+/// else plain code the compiler vectorises for the baseline target. Callers
+/// look it up once per product, not per tile.
 pub(crate) fn tile_kernel() -> Tile {
-    #[cfg(target_arch = "x86_64")]
-    if available() {
-        return tile_avx512;
-    }
-    tile_portable
+    vector_tile().unwrap_or(tile_portable)
 }
 
 /// The [`Tile`] kernel in plain code.
@@ -356,7 +363,7 @@ unsafe fn tile_avx512(
 ///
 /// # Safety
 /// `c` must address rows x cols with row stride `c_rs`.
-unsafe fn store_part(
+pub(crate) unsafe fn store_part(
     tmp: &[f32; MR * NR],
     c: *mut f32,
     c_rs: isize,
@@ -377,38 +384,74 @@ unsafe fn store_part(
 mod tests {
     use super::*;
 
+    /// Every tile kernel this CPU can run, by name.
+    fn kernels() -> Vec<(&'static str, Tile)> {
+        let mut k: Vec<(&'static str, Tile)> = vec![("portable", tile_portable)];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if is_x86_feature_detected!("avx512f") {
+                k.push(("avx512", tile_avx512));
+            }
+            if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+                k.push(("avx2", super::super::tile_avx2::tile));
+            }
+        }
+        #[cfg(target_arch = "aarch64")]
+        if std::arch::is_aarch64_feature_detected!("neon") {
+            k.push(("neon", super::super::tile_neon::tile));
+        }
+        k
+    }
+
     #[test]
-    fn both_tiles_match_a_naive_product_on_a_ragged_corner() {
-        let kc = 37;
-        let a: Vec<f32> = (0..kc * MR).map(|i| ((i * 7) % 13) as f32 - 6.0).collect();
-        let b: Vec<f32> = (0..kc * NR).map(|i| ((i * 5) % 11) as f32 - 5.0).collect();
-        let (rows, cols, c_rs) = (5, 19, 23);
-        for avx in [false, true] {
-            if avx && !available() {
-                continue;
-            }
-            let mut c = vec![1f32; rows * c_rs as usize];
-            unsafe {
-                let f: Tile = if avx { tile_kernel() } else { tile_portable };
-                f(
-                    kc,
-                    a.as_ptr(),
-                    b.as_ptr(),
-                    c.as_mut_ptr(),
-                    c_rs,
-                    true,
-                    rows,
-                    cols,
-                );
-            }
-            for r in 0..rows {
-                for j in 0..c_rs as usize {
-                    let want = if j < cols {
-                        1.0 + (0..kc).map(|p| a[p * MR + r] * b[p * NR + j]).sum::<f32>()
-                    } else {
-                        1.0
-                    };
-                    assert_eq!(c[r * c_rs as usize + j], want, "avx {avx} ({r}, {j})");
+    fn every_tile_matches_a_naive_product_on_full_and_ragged_tiles() {
+        let names: Vec<_> = kernels().iter().map(|k| k.0).collect();
+        eprintln!("tile kernels on this CPU: {names:?}");
+        for (name, f) in kernels() {
+            for (kc, rows, cols, load) in [
+                (37, 5, 19, true),
+                (192, MR, NR, false),
+                (64, MR, NR, true),
+                (1, 3, 17, false),
+                (9, MR, 7, true),
+            ] {
+                let a: Vec<f32> = (0..kc * MR).map(|i| ((i * 7) % 13) as f32 - 6.0).collect();
+                let b: Vec<f32> = (0..kc * NR).map(|i| ((i * 5) % 11) as f32 - 5.0).collect();
+                // Zero past rows / cols, as packing leaves the strips.
+                let a: Vec<f32> = a
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| if i % MR < rows { v } else { 0.0 })
+                    .collect();
+                let b: Vec<f32> = b
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| if i % NR < cols { v } else { 0.0 })
+                    .collect();
+                let c_rs = NR as isize + 3;
+                let mut c = vec![1f32; (rows + 1) * c_rs as usize];
+                unsafe {
+                    f(
+                        kc,
+                        a.as_ptr(),
+                        b.as_ptr(),
+                        c.as_mut_ptr(),
+                        c_rs,
+                        load,
+                        rows,
+                        cols,
+                    );
+                }
+                for r in 0..=rows {
+                    for j in 0..c_rs as usize {
+                        let want = if r < rows && j < cols {
+                            let dot = (0..kc).map(|p| a[p * MR + r] * b[p * NR + j]).sum::<f32>();
+                            if load { 1.0 + dot } else { dot }
+                        } else {
+                            1.0
+                        };
+                        assert_eq!(c[r * c_rs as usize + j], want, "{name} kc {kc} ({r}, {j})");
+                    }
                 }
             }
         }
@@ -417,7 +460,7 @@ mod tests {
     #[test]
     fn matches_a_naive_product_on_ragged_shapes_strides_and_threads() {
         if !available() {
-            eprintln!("no AVX-512 on this CPU: sgemm is not used here");
+            eprintln!("no vector tile kernel on this CPU: sgemm is not used here");
             return;
         }
         let shapes = [
