@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use gait_core::Backend;
 use serde::{Deserialize, Serialize};
 
+use crate::guidance::Cutoffs;
 use crate::leg_mask::LegMaskConfig;
 use crate::modes::{RegenMode, begin_step};
 use crate::schedule::SchedulerKind;
@@ -63,7 +64,17 @@ pub struct ControlnetConfig {
     pub guidance_scale: f64,
     /// Weight of the ControlNet residuals (diffusers' `controlnet_conditioning_scale`).
     pub conditioning_scale: f64,
+    /// `ddim`, `unipc` or `dpmpp2m` (DPM-Solver++ 2M).
     pub scheduler: SchedulerKind,
+    /// Classifier-free guidance on steps `0..=floor(steps * guidance_end)`,
+    /// as diffusers' `SDCFGCutoffCallback`; after it the networks run on one
+    /// latent instead of two. 1.0 (default) guides every step.
+    pub guidance_end: f64,
+    /// The ControlNet runs only on the steps whose fraction of the loop lies
+    /// in [control_guidance_start, control_guidance_end] (diffusers' keys);
+    /// outside, its call is skipped (diffusers runs it and multiplies by 0).
+    pub control_guidance_start: f64,
+    pub control_guidance_end: f64,
     /// Base seed; frame i uses `seed + i` unless `shared_noise` is set.
     pub seed: u64,
     /// Same initial noise for every frame (steadier video).
@@ -98,6 +109,9 @@ impl Default for ControlnetConfig {
             guidance_scale: 7.5,
             conditioning_scale: 1.0,
             scheduler: SchedulerKind::Unipc,
+            guidance_end: 1.0,
+            control_guidance_start: 0.0,
+            control_guidance_end: 1.0,
             seed: 0,
             shared_noise: false,
             dtype: Dtype::F32,
@@ -119,6 +133,7 @@ impl ControlnetConfig {
                 self.steps
             ));
         }
+        self.cutoffs().validate()?;
         if self.batch == 0 {
             return Err("regenerator.batch must be at least 1".into());
         }
@@ -143,6 +158,15 @@ impl ControlnetConfig {
             self.mask.validate()?;
         }
         Ok(())
+    }
+
+    /// The guidance and ControlNet cut-offs.
+    pub fn cutoffs(&self) -> Cutoffs {
+        Cutoffs {
+            guidance_end: self.guidance_end,
+            control_start: self.control_guidance_start,
+            control_end: self.control_guidance_end,
+        }
     }
 
     /// The strength in use: the configured one or the mode's default.

@@ -30,13 +30,14 @@ pub trait DiffusionModels: Send {
     /// (latents, mask, masked-image latents).
     fn unet_in_channels(&self) -> usize;
 
-    /// The UNet's noise prediction with the ControlNet residuals added.
+    /// The UNet's noise prediction with the ControlNet residuals added
+    /// (none on the steps past a ControlNet cut-off).
     fn unet(
         &self,
         sample: &Tensor,
         timestep: f64,
         context: &Tensor,
-        residuals: &ControlResiduals,
+        residuals: Option<&ControlResiduals>,
     ) -> Result<Tensor, DiffuseError>;
 
     /// Images `(B, 3, 8h, 8w)` in [-1, 1] from latents already divided by the
@@ -84,11 +85,14 @@ impl DiffusionModels for Models {
         sample: &Tensor,
         timestep: f64,
         context: &Tensor,
-        residuals: &ControlResiduals,
+        residuals: Option<&ControlResiduals>,
     ) -> Result<Tensor, DiffuseError> {
-        Ok(self
-            .unet
-            .forward_with_residuals(sample, timestep, context, residuals)?)
+        Ok(match residuals {
+            Some(r) => self
+                .unet
+                .forward_with_residuals(sample, timestep, context, r)?,
+            None => self.unet.forward(sample, timestep, context)?,
+        })
     }
 
     fn decode(&self, latents: &Tensor) -> Result<Tensor, DiffuseError> {

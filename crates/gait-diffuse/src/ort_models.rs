@@ -179,6 +179,8 @@ pub struct OrtDenoiser {
     unet: OnnxNet,
     /// Skip-connection residuals (12 for SD 1.5).
     residuals: usize,
+    /// Residual shapes by sample shape, for the steps the ControlNet skips.
+    residual_shapes: Mutex<Vec<(Vec<usize>, Vec<Vec<usize>>)>>,
 }
 
 impl OrtDenoiser {
@@ -229,12 +231,55 @@ impl OrtDenoiser {
             controlnet,
             unet,
             residuals,
+            residual_shapes: Mutex::new(Vec::new()),
         })
     }
 
     /// Number of skip-connection residuals (12 for SD 1.5).
     pub fn num_residuals(&self) -> usize {
         self.residuals
+    }
+
+    /// Residuals of zeros for `sample`: the exported UNet always takes them,
+    /// so the steps past a ControlNet cut-off feed these. Their shapes come
+    /// from one ControlNet run per sample shape (the graph leaves them dynamic).
+    pub fn zero_residuals(
+        &self,
+        sample: &Tensor,
+        context: &Tensor,
+    ) -> Result<ControlResiduals, DiffuseError> {
+        let key = sample.dims().to_vec();
+        let known = self.lock_shapes().iter().find(|(k, _)| *k == key).cloned();
+        let shapes = match known {
+            Some((_, shapes)) => shapes,
+            None => {
+                // The ControlNet's condition is 8x the latents (its embedding halves three times).
+                let (b, _, h, w) = sample.dims4()?;
+                let cond = Tensor::zeros((b, 3, 8 * h, 8 * w), sample.dtype(), sample.device())?;
+                let r = self.controlnet(sample, 0.0, context, &cond, 0.0)?;
+                let shapes: Vec<Vec<usize>> = r
+                    .down
+                    .iter()
+                    .chain([&r.mid])
+                    .map(|t| t.dims().to_vec())
+                    .collect();
+                self.lock_shapes().push((key, shapes.clone()));
+                shapes
+            }
+        };
+        let zeros = |d: &Vec<usize>| Tensor::zeros(d.as_slice(), sample.dtype(), sample.device());
+        let (mid, down) = shapes.split_last().ok_or_else(|| ort_err("no residuals"))?;
+        Ok(ControlResiduals {
+            down: down.iter().map(zeros).collect::<candle_core::Result<_>>()?,
+            mid: zeros(mid)?,
+        })
+    }
+
+    fn lock_shapes(&self) -> std::sync::MutexGuard<'_, Vec<(Vec<usize>, Vec<Vec<usize>>)>> {
+        // A panic elsewhere cannot leave the list half-written: pushes are whole.
+        self.residual_shapes
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
     }
 
     /// The UNet graph's `sample` channels (4, or 9 for an inpainting UNet;
@@ -410,9 +455,15 @@ impl DiffusionModels for OrtModels {
         sample: &Tensor,
         timestep: f64,
         context: &Tensor,
-        residuals: &ControlResiduals,
+        residuals: Option<&ControlResiduals>,
     ) -> Result<Tensor, DiffuseError> {
-        self.denoiser.unet(sample, timestep, context, residuals)
+        match residuals {
+            Some(r) => self.denoiser.unet(sample, timestep, context, r),
+            None => {
+                let zeros = self.denoiser.zero_residuals(sample, context)?;
+                self.denoiser.unet(sample, timestep, context, &zeros)
+            }
+        }
     }
 
     fn decode(&self, latents: &Tensor) -> Result<Tensor, DiffuseError> {

@@ -8,6 +8,8 @@ use std::path::Path;
 use candle_core::{DType, Device, Tensor};
 
 use crate::DiffuseError;
+use crate::controlnet::ControlResiduals;
+use crate::guidance::{Cutoffs, StepPlan};
 use crate::models::DiffusionModels;
 use crate::modes::Inpainting;
 use crate::ort_models::OrtModels;
@@ -24,6 +26,8 @@ pub struct DenoiseParams {
     /// Multiplies the ControlNet residuals.
     pub conditioning_scale: f64,
     pub scheduler: SchedulerKind,
+    /// Steps without CFG or without the ControlNet (1, 0, 1: none).
+    pub cutoffs: Cutoffs,
 }
 
 /// SD 1.5 + ControlNet, loaded and ready to generate.
@@ -138,63 +142,22 @@ impl ControlnetPipeline {
     ) -> Result<Tensor, DiffuseError> {
         let b = latents.dim(0)?;
         let guided = p.guidance_scale > 1.0;
-        let copies = if guided { 2 } else { 1 };
-        let unet_channels = self.models.unet_in_channels();
         let extra = match inpaint {
             Some(Inpainting::Condition {
                 mask,
                 masked_latents,
-            }) => {
-                let extra = Tensor::cat(&[mask, masked_latents], 1)?.to_dtype(self.dtype)?;
-                Some(per_guidance_row(&extra, guided)?)
-            }
+            }) => Some(Tensor::cat(&[mask, masked_latents], 1)?.to_dtype(self.dtype)?),
             _ => None,
         };
-        let expected = latents.dim(1)? + extra.as_ref().map_or(Ok(0), |e| e.dim(1))?;
-        if unet_channels != expected {
-            return Err(DiffuseError::Config(format!(
-                "the UNet takes {unet_channels} input channels but this mode gives it {expected}: \
-                 a 9-channel (inpainting) UNet needs regenerator.mode = \"inpaint\", the other \
-                 modes a 4-channel UNet such as SD 1.5's"
-            )));
-        }
-        if context.dim(0)? != copies {
-            return Err(DiffuseError::Config(format!(
-                "context has {} rows, guidance needs {copies}",
-                context.dim(0)?
-            )));
-        }
-        let (_, n, d) = context.dims3()?;
-        // Rows: B unconditional then B conditional, as diffusers concatenates.
-        let ctx = context
-            .unsqueeze(1)?
-            .broadcast_as((copies, b, n, d))?
-            .reshape((copies * b, n, d))?
-            .to_dtype(self.dtype)?;
-        let control = per_guidance_row(&control.to_dtype(self.dtype)?, guided)?;
+        self.check_inputs(context, latents, extra.as_ref(), guided)?;
+        let rows = Rows::new(self, context, control, extra, b, guided)?;
         let mut x = latents.to_dtype(self.dtype)?;
         let mut sched = Scheduler::new(p.scheduler, p.steps);
         let timesteps = sched.timesteps().get(begin..).unwrap_or_default().to_vec();
         sched.set_begin_index(begin);
         for (i, &t) in timesteps.iter().enumerate() {
-            let input = per_guidance_row(&x, guided)?;
-            let t = t as f64;
-            let res = self
-                .models
-                .controlnet(&input, t, &ctx, &control, p.conditioning_scale)?;
-            let eps = match &extra {
-                Some(e) => self
-                    .models
-                    .unet(&Tensor::cat(&[&input, e], 1)?, t, &ctx, &res)?,
-                None => self.models.unet(&input, t, &ctx, &res)?,
-            };
-            let eps = if guided {
-                let u = eps.narrow(0, 0, b)?;
-                let c = eps.narrow(0, b, b)?;
-                (&u + ((c - &u)? * p.guidance_scale)?)?
-            } else {
-                eps
-            };
+            let plan = p.cutoffs.step(i, timesteps.len(), guided);
+            let eps = self.predict_noise(&rows, &x, t as f64, plan, p)?;
             x = sched.step(&eps, &x)?;
             if let Some(Inpainting::Blend(k)) = inpaint {
                 x = k.blend(&sched, &x, timesteps.get(i + 1).copied())?;
@@ -203,6 +166,119 @@ impl ControlnetPipeline {
         let x = (x / self.models.vae_config().scaling_factor)?;
         let img = self.models.decode(&x)?;
         Ok(((img.to_dtype(DType::F32)? / 2.0)? + 0.5)?.clamp(0f32, 1f32)?)
+    }
+
+    /// The UNet's input channels and the context's rows fit this run.
+    fn check_inputs(
+        &self,
+        context: &Tensor,
+        latents: &Tensor,
+        extra: Option<&Tensor>,
+        guided: bool,
+    ) -> Result<(), DiffuseError> {
+        let unet_channels = self.models.unet_in_channels();
+        let expected = latents.dim(1)? + extra.map_or(Ok(0), |e| e.dim(1))?;
+        if unet_channels != expected {
+            return Err(DiffuseError::Config(format!(
+                "the UNet takes {unet_channels} input channels but this mode gives it {expected}: \
+                 a 9-channel (inpainting) UNet needs regenerator.mode = \"inpaint\", the other \
+                 modes a 4-channel UNet such as SD 1.5's"
+            )));
+        }
+        let copies = if guided { 2 } else { 1 };
+        if context.dim(0)? != copies {
+            return Err(DiffuseError::Config(format!(
+                "context has {} rows, guidance needs {copies}",
+                context.dim(0)?
+            )));
+        }
+        Ok(())
+    }
+
+    /// One step's noise prediction: ControlNet (when the plan runs it), UNet,
+    /// and the guidance mix (when the plan guides).
+    fn predict_noise(
+        &self,
+        rows: &Rows,
+        x: &Tensor,
+        t: f64,
+        plan: StepPlan,
+        p: &DenoiseParams,
+    ) -> Result<Tensor, DiffuseError> {
+        let (ctx, control, extra) = rows.get(plan.guided);
+        let input = per_guidance_row(x, plan.guided)?;
+        let res: Option<ControlResiduals> = if plan.controlnet {
+            Some(
+                self.models
+                    .controlnet(&input, t, ctx, control, p.conditioning_scale)?,
+            )
+        } else {
+            None
+        };
+        let eps = match extra {
+            Some(e) => self
+                .models
+                .unet(&Tensor::cat(&[&input, e], 1)?, t, ctx, res.as_ref())?,
+            None => self.models.unet(&input, t, ctx, res.as_ref())?,
+        };
+        if !plan.guided {
+            return Ok(eps);
+        }
+        let b = x.dim(0)?;
+        let u = eps.narrow(0, 0, b)?;
+        let c = eps.narrow(0, b, b)?;
+        Ok((&u + ((c - &u)? * p.guidance_scale)?)?)
+    }
+}
+
+/// The per-row inputs of the networks, with guidance (unconditional rows then
+/// conditional ones, as diffusers concatenates) and without (after the CFG
+/// cut-off: the conditional rows only).
+struct Rows {
+    guided: Option<(Tensor, Tensor, Option<Tensor>)>,
+    single: (Tensor, Tensor, Option<Tensor>),
+}
+
+impl Rows {
+    fn new(
+        pipe: &ControlnetPipeline,
+        context: &Tensor,
+        control: &Tensor,
+        extra: Option<Tensor>,
+        b: usize,
+        guided: bool,
+    ) -> Result<Self, DiffuseError> {
+        let (copies, n, d) = context.dims3()?;
+        let per_row = |c: &Tensor| -> candle_core::Result<Tensor> {
+            c.unsqueeze(0)?
+                .broadcast_as((b, n, d))?
+                .contiguous()?
+                .to_dtype(pipe.dtype)
+        };
+        let control = control.to_dtype(pipe.dtype)?;
+        // The conditional prompt is the last row of the context.
+        let single = (
+            per_row(&context.get(copies - 1)?)?,
+            control.clone(),
+            extra.clone(),
+        );
+        let guided = if guided {
+            let ctx = Tensor::cat(&[per_row(&context.get(0)?)?, single.0.clone()], 0)?;
+            let extra = extra.map(|e| per_guidance_row(&e, true)).transpose()?;
+            Some((ctx, per_guidance_row(&control, true)?, extra))
+        } else {
+            None
+        };
+        Ok(Self { guided, single })
+    }
+
+    /// Context, control image and inpainting channels for a step.
+    fn get(&self, guided: bool) -> (&Tensor, &Tensor, Option<&Tensor>) {
+        let r = match (&self.guided, guided) {
+            (Some(g), true) => g,
+            _ => &self.single,
+        };
+        (&r.0, &r.1, r.2.as_ref())
     }
 }
 

@@ -169,6 +169,7 @@ impl ControlnetRegenerator {
             guidance_scale: self.config.guidance_scale,
             conditioning_scale: self.config.conditioning_scale,
             scheduler: self.config.scheduler,
+            cutoffs: self.config.cutoffs(),
         };
         let strength = self.config.strength();
         let images = match mode {

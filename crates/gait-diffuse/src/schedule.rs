@@ -1,7 +1,9 @@
 //! Noise schedulers with diffusers' formulas for SD 1.5's training schedule
 //! (scaled-linear betas 0.00085..0.012 over 1000 steps, `steps_offset = 1`,
-//! `set_alpha_to_one = false`): DDIM (eta 0, "leading" spacing) and UniPC
-//! (order 2, bh2, data prediction, "linspace" spacing, lower order at the end).
+//! `set_alpha_to_one = false`): DDIM (eta 0, "leading" spacing), UniPC
+//! (order 2, bh2, data prediction, "linspace" spacing, lower order at the end)
+//! and DPM-Solver++ 2M (diffusers' `DPMSolverMultistepScheduler`: order 2,
+//! midpoint, "linspace" spacing, final sigma 0 so the last step is first order).
 
 use candle_core::{Result, Tensor};
 use serde::{Deserialize, Serialize};
@@ -15,6 +17,19 @@ pub enum SchedulerKind {
     Ddim,
     #[default]
     Unipc,
+    /// DPM-Solver++ 2M (`scheduler = "dpmpp2m"`).
+    Dpmpp2m,
+}
+
+impl SchedulerKind {
+    /// The name used in the TOML.
+    pub fn name(self) -> &'static str {
+        match self {
+            SchedulerKind::Ddim => "ddim",
+            SchedulerKind::Unipc => "unipc",
+            SchedulerKind::Dpmpp2m => "dpmpp2m",
+        }
+    }
 }
 
 /// `alphas_cumprod` of SD's scaled-linear beta schedule.
@@ -54,7 +69,7 @@ impl Scheduler {
                 (0..steps).rev().map(|i| i * ratio + 1).collect()
             }
             // np.linspace(0, 999, steps + 1).round() (ties to even), reversed, last dropped.
-            SchedulerKind::Unipc => (1..=steps)
+            SchedulerKind::Unipc | SchedulerKind::Dpmpp2m => (1..=steps)
                 .rev()
                 .map(|i| {
                     (i as f64 * (TRAIN_STEPS - 1) as f64 / steps as f64).round_ties_even() as usize
@@ -99,6 +114,7 @@ impl Scheduler {
         let out = match self.kind {
             SchedulerKind::Ddim => self.ddim(eps, sample),
             SchedulerKind::Unipc => self.unipc(eps, sample),
+            SchedulerKind::Dpmpp2m => self.dpmpp2m(eps, sample),
         };
         self.step_index += 1;
         out
@@ -183,6 +199,35 @@ impl Scheduler {
     }
 }
 
+impl Scheduler {
+    /// DPM-Solver++ 2M: the data prediction `m`, then a first-order update
+    /// at the first and last steps (the last goes to sigma 0) and the
+    /// second-order midpoint update in between.
+    fn dpmpp2m(&mut self, eps: &Tensor, sample: &Tensor) -> Result<Tensor> {
+        let i = self.step_index.min(self.timesteps.len() - 1);
+        let (alpha_s0, sigma_s0, lambda_s0) = self.coeffs(i);
+        let m = ((sample - (eps * sigma_s0)?)? / alpha_s0)?;
+        self.outputs.push(m);
+        if self.outputs.len() > 2 {
+            self.outputs.remove(0);
+        }
+        // At the last step sigma is 0: lambda is +inf and exp(-h) - 1 = -1.
+        let (alpha_t, sigma_t, lambda_t) = self.coeffs(i + 1);
+        let h = lambda_t - lambda_s0;
+        let phi = (-h).exp_m1();
+        let m0 = &self.outputs[self.outputs.len() - 1];
+        let x = ((sample * (sigma_t / sigma_s0))? - (m0 * (alpha_t * phi))?)?;
+        let last = i + 1 == self.timesteps.len();
+        if self.outputs.len() < 2 || last {
+            return Ok(x);
+        }
+        let (_, _, lambda_s1) = self.coeffs(i - 1);
+        let r0 = (lambda_s0 - lambda_s1) / h;
+        let d1 = ((m0 - &self.outputs[0])? / r0)?;
+        x - (d1 * (0.5 * alpha_t * phi))?
+    }
+}
+
 /// First two B(h) coefficients of UniPC's linear system (bh2 variant).
 fn b_coeffs(hh: f64, b_h: f64) -> (f64, f64) {
     let h_phi_1 = hh.exp_m1();
@@ -202,6 +247,14 @@ mod tests {
         assert_eq!(
             Scheduler::new(SchedulerKind::Ddim, 4).timesteps(),
             &[751, 501, 251, 1]
+        );
+    }
+
+    #[test]
+    fn dpmpp2m_shares_unipc_timesteps() {
+        assert_eq!(
+            Scheduler::new(SchedulerKind::Dpmpp2m, 4).timesteps(),
+            Scheduler::new(SchedulerKind::Unipc, 4).timesteps()
         );
     }
 

@@ -100,6 +100,7 @@ pub fn check_two_step_pipeline(label: &str, pipe: &gait_diffuse::ControlnetPipel
             guidance_scale: 7.5,
             conditioning_scale: 0.8,
             scheduler: kind,
+            cutoffs: Default::default(),
         };
         let img = pipe
             .generate(&ctx, &control, &e["pipe.latents"], &p)
@@ -145,6 +146,7 @@ pub fn modes_params(kind: gait_diffuse::SchedulerKind) -> gait_diffuse::DenoiseP
         guidance_scale: 7.5,
         conditioning_scale: 0.8,
         scheduler: kind,
+        cutoffs: Default::default(),
     }
 }
 
@@ -288,4 +290,50 @@ pub fn tiny_inpaint_unet() -> PathBuf {
 /// Its ONNX export (`unet/model.onnx`).
 pub fn tiny_onnx_inpaint() -> PathBuf {
     fixtures().join("tiny_onnx_inpaint")
+}
+
+/// The speed settings' cases of tools/diffuse/make_cutoff_fixtures.py (DPM-Solver++ 2M,
+/// the CFG and ControlNet cut-offs, in the three modes) against diffusers' images, from
+/// the modes fixture's frame `init` (1x3xHxW in [-1, 1]), edge map, mask and noise.
+pub fn check_cutoffs(
+    label: &str,
+    pipe: &gait_diffuse::ControlnetPipeline,
+    init: &Tensor,
+    tol: f64,
+) {
+    use gait_diffuse::{Cutoffs, DenoiseParams, SchedulerKind};
+    let text = std::fs::read_to_string(fixtures().join("cutoffs.json")).unwrap();
+    let cases: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();
+    let images =
+        candle_core::safetensors::load(fixtures().join("cutoffs.safetensors"), &Device::Cpu)
+            .unwrap();
+    let e = modes();
+    let ctx = paper_context(pipe);
+    let (control, mask) = (modes_control(&e), modes_mask(&e));
+    let (eps, noise) = (&e["modes.enc_eps"], &e["modes.noise"]);
+    assert_eq!(cases.len(), 6, "cutoffs.json lists every case");
+    for c in &cases {
+        let f = |k: &str| c[k].as_f64().unwrap();
+        let name = c["name"].as_str().unwrap();
+        let p = DenoiseParams {
+            steps: c["steps"].as_u64().unwrap() as usize,
+            guidance_scale: f("guidance_scale"),
+            conditioning_scale: f("conditioning_scale"),
+            scheduler: serde_json::from_value::<SchedulerKind>(c["scheduler"].clone()).unwrap(),
+            cutoffs: Cutoffs {
+                guidance_end: f("guidance_end"),
+                control_start: f("control_guidance_start"),
+                control_end: f("control_guidance_end"),
+            },
+        };
+        let strength = f("strength");
+        let img = match c["mode"].as_str().unwrap() {
+            "text2img" => pipe.generate(&ctx, &control, noise, &p),
+            "img2img" => pipe.img2img(&ctx, &control, init, eps, noise, strength, &p),
+            _ => pipe.inpaint(&ctx, &control, init, &mask, eps, noise, strength, &p),
+        }
+        .unwrap();
+        let want = &images[&format!("cut.{name}.image")];
+        assert_close(&format!("{label}{name}"), &img, want, tol);
+    }
 }

@@ -61,6 +61,11 @@ fn img2img_and_inpaint_match_diffusers() {
     common::check_modes("", &pipeline(), &init_image(&modes()), TOL);
 }
 
+#[test]
+fn dpmpp2m_and_the_guidance_and_controlnet_cutoffs_match_diffusers() {
+    common::check_cutoffs("", &pipeline(), &init_image(&modes()), TOL);
+}
+
 /// The tiny pipeline with the 9-channel inpainting UNet in place of SD's.
 fn inpaint9_pipeline() -> ControlnetPipeline {
     let dir = tempfile::tempdir().unwrap();

@@ -28,6 +28,11 @@ fn ort_img2img_and_inpaint_match_diffusers() {
 }
 
 #[test]
+fn ort_dpmpp2m_and_the_guidance_and_controlnet_cutoffs_match_diffusers() {
+    common::check_cutoffs("ort ", &pipeline(), &modes()["modes.init"], TOL);
+}
+
+#[test]
 fn ort_nine_channel_inpainting_unet_matches_diffusers() {
     require_ort();
     let dir = tempfile::tempdir().unwrap();

@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""Fixtures for gait-diffuse's speed settings (issue 20): DPM-Solver++ 2M, the
+classifier-free-guidance cut-off and the ControlNet's control_guidance_start / end.
+
+Runs stock diffusers pipelines (StableDiffusionControlNetPipeline, ...Img2ImgPipeline and
+...InpaintPipeline, 4-channel UNet) on the tiny random models of make_fixtures.py under
+crates/gait-diffuse/tests/fixtures/tiny/, with the frame, edge map, mask and noise of
+modes.safetensors (make_modes_fixtures.py), and writes
+
+  crates/gait-diffuse/tests/fixtures/cutoffs.json           the cases and their settings
+  crates/gait-diffuse/tests/fixtures/cutoffs.safetensors    cut.<case>.image (1, 3, 64, 64) in [0, 1]
+
+The CFG cut-off is diffusers' SDCFGCutoffCallback (cutoff_step_ratio = guidance_end): after
+the step it fires on, guidance is off and the prompt embeddings keep their conditional row.
+A ControlNet pipeline also holds its control image twice (one per guidance row), so the
+callback here also keeps the conditional control image, as diffusers'
+SDXLControlnetCFGCutoffCallback does for SDXL. DPM-Solver++ 2M is DPMSolverMultistepScheduler
+with its defaults (dpmsolver++, order 2, midpoint, final sigma 0) on SD 1.5's config.
+
+Needs the packages of make_modes_fixtures.py. Regenerate (after make_fixtures.py and
+make_modes_fixtures.py):
+  python tools/diffuse/make_cutoff_fixtures.py
+"""
+
+import json
+import os
+
+import torch
+from diffusers import (
+    AutoencoderKL,
+    ControlNetModel,
+    DDIMScheduler,
+    DPMSolverMultistepScheduler,
+    StableDiffusionControlNetImg2ImgPipeline,
+    StableDiffusionControlNetInpaintPipeline,
+    StableDiffusionControlNetPipeline,
+    UNet2DConditionModel,
+    UniPCMultistepScheduler,
+)
+from diffusers.callbacks import SDCFGCutoffCallback
+from diffusers.models.autoencoders import vae as vae_module
+from diffusers.pipelines.controlnet import pipeline_controlnet_img2img, pipeline_controlnet_inpaint
+from PIL import Image
+from safetensors.torch import load_file, save_file
+from transformers import CLIPTextModel
+
+from make_fixtures import SCHED_KW
+from make_modes_fixtures import COND_SCALE, GUIDANCE, FIX, TINY, fixed
+
+SCHEDULERS = {"ddim": DDIMScheduler, "unipc": UniPCMultistepScheduler, "dpmpp2m": DPMSolverMultistepScheduler}
+
+# name, mode, scheduler, steps, strength, guidance_end, control_guidance_start, control_guidance_end
+CASES = [
+    ("t2i_dpmpp2m", "text2img", "dpmpp2m", 6, 1.0, 1.0, 0.0, 1.0),
+    ("t2i_cfg_unipc", "text2img", "unipc", 6, 1.0, 0.4, 0.0, 1.0),
+    ("t2i_control_ddim", "text2img", "ddim", 6, 1.0, 1.0, 0.2, 0.7),
+    ("t2i_all_dpmpp2m", "text2img", "dpmpp2m", 8, 1.0, 0.5, 0.1, 0.6),
+    ("img2img_all_dpmpp2m", "img2img", "dpmpp2m", 8, 0.75, 0.5, 0.1, 0.6),
+    ("inpaint_all_unipc", "inpaint", "unipc", 8, 0.75, 0.5, 0.1, 0.6),
+]
+
+
+class ControlNetCFGCutoffCallback(SDCFGCutoffCallback):
+    """SDCFGCutoffCallback that also keeps the conditional half of the other per-guidance-row
+    inputs: the control image, and the inpainting pipeline's mask and masked-image latents."""
+
+    def __init__(self, cutoff_step_ratio, halves):
+        super().__init__(cutoff_step_ratio=cutoff_step_ratio)
+        self.halves = halves
+        self.tensor_inputs = ["prompt_embeds", *halves]
+
+    def callback_fn(self, pipeline, step_index, timestep, callback_kwargs):
+        cutoff = int(pipeline.num_timesteps * self.config.cutoff_step_ratio)
+        if step_index == cutoff:
+            callback_kwargs = super().callback_fn(pipeline, step_index, timestep, callback_kwargs)
+            for key in self.halves:
+                t = callback_kwargs[key]
+                if t is None:
+                    continue
+                if key in ("mask", "masked_image_latents"):
+                    # The inpainting pipeline does not take these back from the callback's
+                    # output (diffusers 0.42.1), so shrink its own tensor in place.
+                    t.data = t.data[-1:].clone()
+                else:
+                    callback_kwargs[key] = t[-1:]
+        return callback_kwargs
+
+
+def main():
+    f32 = torch.float32
+    unet = UNet2DConditionModel.from_pretrained(os.path.join(TINY, "unet"), torch_dtype=f32).eval()
+    controlnet = ControlNetModel.from_pretrained(os.path.join(TINY, "controlnet"), torch_dtype=f32).eval()
+    vae = AutoencoderKL.from_pretrained(os.path.join(TINY, "vae"), torch_dtype=f32).eval()
+    text = CLIPTextModel.from_pretrained(os.path.join(TINY, "text_encoder"), torch_dtype=f32).eval()
+    with open(os.path.join(FIX, "tokenizer_cases.json")) as f:
+        cases = json.load(f)
+    with torch.no_grad():
+        pos = text(torch.tensor([cases[0]["ids"]]))[0]
+        neg = text(torch.tensor([cases[1]["ids"]]))[0]
+    m = load_file(os.path.join(FIX, "modes.safetensors"))
+    frame = Image.fromarray(m["modes.frame"].to(torch.uint8).numpy())
+    control = Image.fromarray(m["modes.edge"].to(torch.uint8).numpy()).convert("RGB")
+    mask = Image.fromarray(m["modes.mask"].to(torch.uint8).numpy())
+    noise, enc_eps = m["modes.noise"], m["modes.enc_eps"]
+    vae_module.randn_tensor = fixed(enc_eps, "VAE latent sample")
+    pipeline_controlnet_img2img.randn_tensor = fixed(noise, "img2img noise")
+    pipeline_controlnet_inpaint.randn_tensor = fixed(noise, "inpaint noise")
+
+    parts = dict(vae=vae, text_encoder=text, tokenizer=None, unet=unet, controlnet=controlnet,
+                 safety_checker=None, feature_extractor=None, requires_safety_checker=False)
+    exp, listed = {}, []
+    for name, mode, sched, steps, strength, g_end, c_start, c_end in CASES:
+        call = dict(prompt_embeds=pos, negative_prompt_embeds=neg, num_inference_steps=steps,
+                    guidance_scale=GUIDANCE, controlnet_conditioning_scale=COND_SCALE,
+                    control_guidance_start=c_start, control_guidance_end=c_end,
+                    height=64, width=64, output_type="np")
+        scheduler = SCHEDULERS[sched].from_config(SCHED_KW)
+        if mode == "text2img":
+            pipe = StableDiffusionControlNetPipeline(scheduler=scheduler, **parts)
+            args = dict(image=control, latents=noise.clone())
+            halves = ["image"]
+        elif mode == "img2img":
+            pipe = StableDiffusionControlNetImg2ImgPipeline(scheduler=scheduler, **parts)
+            args = dict(image=frame, control_image=control, strength=strength)
+            halves = ["control_image"]
+        else:
+            pipe = StableDiffusionControlNetInpaintPipeline(scheduler=scheduler, **parts)
+            args = dict(image=frame, mask_image=mask, control_image=control, strength=strength)
+            halves = ["control_image", "mask", "masked_image_latents"]
+        if g_end < 1.0:
+            cb = ControlNetCFGCutoffCallback(g_end, halves)
+            args.update(callback_on_step_end=cb, callback_on_step_end_tensor_inputs=cb.tensor_inputs)
+        pipe.set_progress_bar_config(disable=True)
+        out = pipe(**call, **args).images
+        exp[f"cut.{name}.image"] = torch.from_numpy(out).permute(0, 3, 1, 2).float().contiguous()
+        listed.append(dict(name=name, mode=mode, scheduler=sched, steps=steps, strength=strength,
+                           guidance_scale=GUIDANCE, conditioning_scale=COND_SCALE, guidance_end=g_end,
+                           control_guidance_start=c_start, control_guidance_end=c_end))
+    save_file(exp, os.path.join(FIX, "cutoffs.safetensors"))
+    with open(os.path.join(FIX, "cutoffs.json"), "w") as f:
+        json.dump(listed, f, indent=1)
+    print("wrote", os.path.join(FIX, "cutoffs.safetensors"))
+
+
+if __name__ == "__main__":
+    main()
