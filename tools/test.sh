@@ -17,3 +17,5 @@ cargo test --workspace
 # run, with its input saved under target/fuzz-crashes/ and printed in hex.
 cargo build -p gait-fuzz
 target/debug/gait-fuzz run --seconds "${GAIT_FUZZ_SECONDS:-10}"
+# The aarch64 NEON tile kernel's tests, cross-built and run under qemu-aarch64 (issue 20).
+bash tools/diffuse/test_neon.sh

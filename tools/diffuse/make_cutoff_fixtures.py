@@ -37,13 +37,13 @@ from diffusers import (
     UNet2DConditionModel,
     UniPCMultistepScheduler,
 )
-from diffusers.callbacks import SDCFGCutoffCallback
 from diffusers.models.autoencoders import vae as vae_module
 from diffusers.pipelines.controlnet import pipeline_controlnet_img2img, pipeline_controlnet_inpaint
 from PIL import Image
 from safetensors.torch import load_file, save_file
 from transformers import CLIPTextModel
 
+from cfg_cutoff import cutoff_kwargs
 from make_fixtures import SCHED_KW
 from make_modes_fixtures import COND_SCALE, GUIDANCE, FIX, TINY, fixed
 
@@ -58,32 +58,6 @@ CASES = [
     ("img2img_all_dpmpp2m", "img2img", "dpmpp2m", 8, 0.75, 0.5, 0.1, 0.6),
     ("inpaint_all_unipc", "inpaint", "unipc", 8, 0.75, 0.5, 0.1, 0.6),
 ]
-
-
-class ControlNetCFGCutoffCallback(SDCFGCutoffCallback):
-    """SDCFGCutoffCallback that also keeps the conditional half of the other per-guidance-row
-    inputs: the control image, and the inpainting pipeline's mask and masked-image latents."""
-
-    def __init__(self, cutoff_step_ratio, halves):
-        super().__init__(cutoff_step_ratio=cutoff_step_ratio)
-        self.halves = halves
-        self.tensor_inputs = ["prompt_embeds", *halves]
-
-    def callback_fn(self, pipeline, step_index, timestep, callback_kwargs):
-        cutoff = int(pipeline.num_timesteps * self.config.cutoff_step_ratio)
-        if step_index == cutoff:
-            callback_kwargs = super().callback_fn(pipeline, step_index, timestep, callback_kwargs)
-            for key in self.halves:
-                t = callback_kwargs[key]
-                if t is None:
-                    continue
-                if key in ("mask", "masked_image_latents"):
-                    # The inpainting pipeline does not take these back from the callback's
-                    # output (diffusers 0.42.1), so shrink its own tensor in place.
-                    t.data = t.data[-1:].clone()
-                else:
-                    callback_kwargs[key] = t[-1:]
-        return callback_kwargs
 
 
 def main():
@@ -127,9 +101,7 @@ def main():
             pipe = StableDiffusionControlNetInpaintPipeline(scheduler=scheduler, **parts)
             args = dict(image=frame, mask_image=mask, control_image=control, strength=strength)
             halves = ["control_image", "mask", "masked_image_latents"]
-        if g_end < 1.0:
-            cb = ControlNetCFGCutoffCallback(g_end, halves)
-            args.update(callback_on_step_end=cb, callback_on_step_end_tensor_inputs=cb.tensor_inputs)
+        args.update(cutoff_kwargs(g_end, halves))
         pipe.set_progress_bar_config(disable=True)
         out = pipe(**call, **args).images
         exp[f"cut.{name}.image"] = torch.from_numpy(out).permute(0, 3, 1, 2).float().contiguous()

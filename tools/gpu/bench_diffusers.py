@@ -8,8 +8,9 @@
                             sample video's frames (OUT/edges, square), and OUT/frames: N frames
                             of the sample video, forward then backward, as JPEGs for `gait run`.
   diffusers WEIGHTS EDGES   StableDiffusionControlNetPipeline on those weights and edge maps:
-                            UniPC, guidance 7.5, the paper's prompts, one JSON line of per-frame
-                            seconds (the first --warmup calls untimed), like regen_bench's.
+                            UniPC (or --scheduler), guidance 7.5, the paper's prompts, optional
+                            cut-offs (--guidance-end, --control-start/--control-end), one JSON line
+                            of per-frame seconds (the first --warmup calls untimed), like regen_bench's.
   report   JSONL            the markdown table for BENCHMARKS.md from the JSON lines of a run.
 
 Needs: torch (2.11+cu130 on the GPU machines), diffusers==0.42.1 (carried as wheels, see
@@ -134,8 +135,14 @@ def prepare(args):
 def diffusers_run(args):
     import numpy as np
     import torch
-    from diffusers import (AutoencoderKL, ControlNetModel, StableDiffusionControlNetPipeline,
-                           UNet2DConditionModel, UniPCMultistepScheduler)
+    from diffusers import (AutoencoderKL, ControlNetModel, DDIMScheduler, DPMSolverMultistepScheduler,
+                           StableDiffusionControlNetPipeline, UNet2DConditionModel, UniPCMultistepScheduler)
+
+    sys.path.insert(0, os.path.join(ROOT, "tools", "diffuse"))
+    from cfg_cutoff import cutoff_kwargs
+
+    scheduler = {"unipc": UniPCMultistepScheduler, "ddim": DDIMScheduler,
+                 "dpmpp2m": DPMSolverMultistepScheduler}[args.scheduler]
     from PIL import Image
     from transformers import CLIPTextModel, CLIPTokenizer
 
@@ -150,7 +157,7 @@ def diffusers_run(args):
                                 model_max_length=77),
         unet=UNet2DConditionModel.from_pretrained(os.path.join(sd, "unet"), torch_dtype=dtype),
         controlnet=ControlNetModel.from_pretrained(os.path.join(args.weights, "controlnet"), torch_dtype=dtype),
-        scheduler=UniPCMultistepScheduler(**SCHEDULER),
+        scheduler=scheduler(**SCHEDULER),
         safety_checker=None, feature_extractor=None, requires_safety_checker=False,
     ).to(dev)
     pipe.set_progress_bar_config(disable=True)
@@ -168,7 +175,8 @@ def diffusers_run(args):
         t = time.perf_counter()
         out = pipe([PROMPT] * args.batch, image=images, negative_prompt=[NEGATIVE] * args.batch,
                    num_inference_steps=args.steps, guidance_scale=7.5, height=size, width=size,
-                   generator=gen, output_type="np").images
+                   control_guidance_start=args.control_start, control_guidance_end=args.control_end,
+                   generator=gen, output_type="np", **cutoff_kwargs(args.guidance_end, ["image"])).images
         sync()
         s = time.perf_counter() - t
         assert len(out) == args.batch and np.asarray(out).shape[1:3] == (size, size)
@@ -177,6 +185,8 @@ def diffusers_run(args):
     per_frame = per_frame[:args.frames]
     print(json.dumps({
         "impl": "diffusers", "device": dev, "dtype": args.dtype, "steps": args.steps, "batch": args.batch,
+        "scheduler": args.scheduler, "guidance_end": args.guidance_end,
+        "control_guidance": [args.control_start, args.control_end],
         "size": size, "load_s": round(load_s, 3), "median_s": round(statistics.median(per_frame), 4),
         "per_frame_s": [round(s, 4) for s in per_frame],
         "torch": torch.__version__, "diffusers": __import__("diffusers").__version__,
@@ -228,6 +238,10 @@ def main():
     a.add_argument("--device", default="cuda")
     a.add_argument("--dtype", default="f16", choices=["f32", "f16", "bf16"])
     a.add_argument("--steps", type=int, default=20)
+    a.add_argument("--scheduler", default="unipc", choices=["unipc", "ddim", "dpmpp2m"])
+    a.add_argument("--guidance-end", type=float, default=1.0, help="CFG cut-off (cfg_cutoff.py)")
+    a.add_argument("--control-start", type=float, default=0.0)
+    a.add_argument("--control-end", type=float, default=1.0)
     a.add_argument("--batch", type=int, default=1)
     a.add_argument("--frames", type=int, default=8)
     a.add_argument("--warmup", type=int, default=1)

@@ -5,7 +5,8 @@
 //!
 //! Usage: regen_bench SD_DIR CONTROLNET_DIR EDGES_DIR [key=value ...]
 //! keys: device (cpu | cuda | cuda:N), dtype (f32 | f16 | bf16), steps,
-//! batch, frames (timed), warmup (untimed), scheduler (unipc | ddim).
+//! batch, frames (timed), warmup (untimed), scheduler (unipc | ddim | dpmpp2m),
+//! guidance_end, control_guidance_start, control_guidance_end.
 //! EDGES_DIR holds square grayscale PNG edge maps (white edges on black);
 //! frame i uses the (i mod n)-th. Prints one JSON line.
 
@@ -19,7 +20,8 @@ use gait_diffuse::{ControlnetConfig, ControlnetRegenerator};
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
 const USAGE: &str = "usage: regen_bench SD_DIR CONTROLNET_DIR EDGES_DIR [device=cuda] [dtype=f16] \
-                     [steps=20] [batch=1] [frames=8] [warmup=1] [scheduler=unipc]";
+                     [steps=20] [batch=1] [frames=8] [warmup=1] [scheduler=unipc] [guidance_end=1] \
+                     [control_guidance_start=0] [control_guidance_end=1]";
 
 fn main() {
     if let Err(e) = run() {
@@ -41,6 +43,9 @@ fn run() -> Res<()> {
         ("frames", "8"),
         ("warmup", "1"),
         ("scheduler", "unipc"),
+        ("guidance_end", "1.0"),
+        ("control_guidance_start", "0.0"),
+        ("control_guidance_end", "1.0"),
     ]
     .into_iter()
     .map(|(k, v)| (k.to_string(), v.to_string()))
@@ -65,11 +70,15 @@ fn run() -> Res<()> {
     // stays at the regenerator's defaults, the paper's settings.
     let config: ControlnetConfig = toml_config(&format!(
         "sd_path = {:?}\ncontrolnet_path = {:?}\ndtype = {:?}\nsteps = {steps}\nbatch = {batch}\n\
-         resolution = {size}\nscheduler = {:?}\n",
+         resolution = {size}\nscheduler = {:?}\nguidance_end = {}\ncontrol_guidance_start = {}\n\
+         control_guidance_end = {}\n",
         abs(&args[0])?,
         abs(&args[1])?,
         opts["dtype"],
         opts["scheduler"],
+        opts["guidance_end"],
+        opts["control_guidance_start"],
+        opts["control_guidance_end"],
     ))?;
     let ctx = StageContext::new(".").on(device);
     let t0 = Instant::now();
@@ -110,8 +119,13 @@ fn run() -> Res<()> {
     let median = sorted[sorted.len() / 2];
     println!(
         "{{\"impl\": \"gait\", \"device\": \"{device}\", \"dtype\": {:?}, \"steps\": {steps}, \"batch\": {batch}, \
+         \"scheduler\": {:?}, \"guidance_end\": {}, \"control_guidance\": [{}, {}], \
          \"size\": {size}, \"load_s\": {load_s:.3}, \"median_s\": {median:.4}, \"per_frame_s\": {:?}}}",
         opts["dtype"],
+        opts["scheduler"],
+        opts["guidance_end"],
+        opts["control_guidance_start"],
+        opts["control_guidance_end"],
         per_frame
             .iter()
             .map(|s| (s * 1e4).round() / 1e4)
