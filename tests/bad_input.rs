@@ -150,6 +150,43 @@ fn unknown_stage_kind_lists_the_choices() {
 }
 
 #[test]
+fn speed_settings_out_of_range_name_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &[&str]); 4] = [
+        (
+            "regenerator.guidance_end=1.5",
+            &["regenerator.guidance_end = 1.5", "[0, 1]"],
+        ),
+        (
+            "regenerator.control_guidance_start=0.9",
+            &["control_guidance_start = 0.9", "control_guidance_end = 0.8"],
+        ),
+        ("regenerator.scheduler=\"euler\"", &["euler", "dpmpp2m"]),
+        (
+            "regenerator.control_guidance_end=-1",
+            &["control_guidance_end = -1"],
+        ),
+    ];
+    for (set, words) in cases {
+        fails_with(
+            gait()
+                .args([
+                    "run",
+                    "--no-progress",
+                    "--config",
+                    "configs/zero-shot-fast.toml",
+                ])
+                .args(["--set", set, "--input"])
+                .arg(common::sample_video())
+                .arg("--out")
+                .arg(dir.path().join("out")),
+            words,
+        );
+        assert_no_results(&dir.path().join("out"));
+    }
+}
+
+#[test]
 fn missing_model_file_names_the_fetch_command() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");

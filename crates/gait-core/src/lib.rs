@@ -6,6 +6,8 @@
 //! they never depend on each other, only on this crate.
 
 mod backend;
+#[cfg(feature = "candle")]
+pub mod checkpoint;
 mod context;
 mod device;
 pub mod dlc;

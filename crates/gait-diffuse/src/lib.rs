@@ -21,6 +21,7 @@ mod regenerator;
 mod schedule;
 mod tokenizer;
 pub mod unet;
+mod vae_decoder;
 mod vae_encoder;
 mod warp;
 pub mod weights;
@@ -44,6 +45,7 @@ pub use regenerator::{ControlnetRegenerator, canvas_for};
 pub use schedule::{Scheduler, SchedulerKind};
 use serde::{Deserialize, Serialize};
 pub use tokenizer::{ClipTokenizer, MAX_LEN};
+pub use vae_decoder::VaeDecoder;
 pub use vae_encoder::VaeEncoder;
 
 /// The `[regenerator]` table. `kind` picks the regenerator.

@@ -96,8 +96,7 @@ impl DiffusionModels for Models {
     }
 
     fn decode(&self, latents: &Tensor) -> Result<Tensor, DiffuseError> {
-        // candle-transformers 0.11.1's VAE decoder mixes the images of a batch
-        // (its mid-block attention), so decode one image at a time.
+        // One image at a time: a decode's activations at 512x512 are hundreds of MB.
         let imgs = (0..latents.dim(0)?)
             .map(|i| self.vae.decode(&latents.narrow(0, i, 1)?))
             .collect::<candle_core::Result<Vec<_>>>()?;

@@ -9,7 +9,6 @@ use std::sync::Mutex;
 use candle_core::{DType, Device, Shape, Tensor};
 use candle_nn::VarBuilder;
 use candle_nn::var_builder::SimpleBackend;
-use candle_transformers::models::stable_diffusion::vae::AutoEncoderKL;
 
 use crate::DiffuseError;
 use crate::clip_text::ClipTextModel;
@@ -17,6 +16,7 @@ use crate::controlnet::ControlNet;
 use crate::model_config::{TextConfig, UnetConfig, VaeConfig, read_config};
 use crate::modes::INPAINT_UNET_CHANNELS;
 use crate::unet::UNet2DConditionModel;
+use crate::vae_decoder::VaeDecoder;
 use crate::vae_encoder::VaeEncoder;
 
 /// Weight file of each component inside the SD folder (diffusers layout).
@@ -71,7 +71,7 @@ fn var_builder(
 pub struct Models {
     pub unet: UNet2DConditionModel,
     pub controlnet: ControlNet,
-    pub vae: AutoEncoderKL,
+    pub vae: VaeDecoder,
     pub text: ClipTextModel,
     pub vae_config: VaeConfig,
     pub text_config: TextConfig,
@@ -133,13 +133,8 @@ impl Models {
         let controlnet = ControlNet::new(var_builder(&path, dtype, device)?, &cn_cfg)
             .map_err(|e| DiffuseError::bad_model(&path, e))?;
         let path = sd_dir.join(VAE_FILE);
-        let vae = AutoEncoderKL::new(
-            var_builder(&path, dtype, device)?,
-            3,
-            3,
-            vae_config.to_candle(),
-        )
-        .map_err(|e| DiffuseError::bad_model(&path, e))?;
+        let vae = VaeDecoder::new(var_builder(&path, dtype, device)?, &vae_config)
+            .map_err(|e| DiffuseError::bad_model(&path, e))?;
         let path = sd_dir.join(TEXT_FILE);
         let text = ClipTextModel::new(var_builder(&path, dtype, device)?, &text_config)
             .map_err(|e| DiffuseError::bad_model(&path, e))?;
@@ -242,7 +237,7 @@ pub fn requested_tensors(
     match component {
         Component::Unet => build_unet(vb, unet).map(|_| ())?,
         Component::ControlNet => ControlNet::new(vb, unet).map(|_| ())?,
-        Component::Vae => AutoEncoderKL::new(vb, 3, 3, vae.to_candle()).map(|_| ())?,
+        Component::Vae => VaeDecoder::new(vb, vae).map(|_| ())?,
         Component::TextEncoder => ClipTextModel::new(vb, text).map(|_| ())?,
         Component::VaeEncoder => VaeEncoder::new(vb, vae).map(|_| ())?,
     }

@@ -14,21 +14,27 @@ fn loaders_request_exactly_the_real_checkpoints_tensors() {
     let text = std::fs::read_to_string(common::fixtures().join("sd15_manifest.json")).unwrap();
     let manifest: BTreeMap<String, BTreeMap<String, Vec<usize>>> =
         serde_json::from_str(&text).unwrap();
-    for (key, component) in [
-        ("unet", Component::Unet),
-        ("controlnet", Component::ControlNet),
-        ("vae", Component::Vae),
-        ("text_encoder", Component::TextEncoder),
+    // The VAE file holds the decoder (every run) and the encoder (image-to-image, inpainting).
+    for (key, components) in [
+        ("unet", &[Component::Unet][..]),
+        ("controlnet", &[Component::ControlNet]),
+        ("vae", &[Component::Vae, Component::VaeEncoder]),
+        ("text_encoder", &[Component::TextEncoder]),
     ] {
         let want = &manifest[key];
-        let got = requested_tensors(
-            component,
-            &UnetConfig::default(),
-            &VaeConfig::default(),
-            &TextConfig::default(),
-            want.keys().cloned().collect(),
-        )
-        .unwrap();
+        let mut got = BTreeMap::new();
+        for &component in components {
+            got.extend(
+                requested_tensors(
+                    component,
+                    &UnetConfig::default(),
+                    &VaeConfig::default(),
+                    &TextConfig::default(),
+                    want.keys().cloned().collect(),
+                )
+                .unwrap(),
+            );
+        }
         let missing: Vec<_> = want.keys().filter(|k| !got.contains_key(*k)).collect();
         let extra: Vec<_> = got.keys().filter(|k| !want.contains_key(*k)).collect();
         assert!(

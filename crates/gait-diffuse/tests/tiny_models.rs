@@ -5,7 +5,6 @@ mod common;
 
 use candle_core::{DType, Device};
 use candle_nn::VarBuilder;
-use candle_transformers::models::stable_diffusion::vae::AutoEncoderKL;
 use common::{assert_close, check_two_step_pipeline, expected, tiny};
 use gait_diffuse::model_config::{TextConfig, UnetConfig, VaeConfig, read_config};
 use gait_diffuse::weights::build_unet;
@@ -75,11 +74,9 @@ fn controlnet_residuals_and_unet_match_diffusers() {
 fn vae_decode_matches_diffusers() {
     let e = expected();
     let cfg: VaeConfig = read_config(&tiny().join("vae")).unwrap();
-    let vae = AutoEncoderKL::new(
+    let vae = gait_diffuse::VaeDecoder::new(
         vb(tiny().join("vae/diffusion_pytorch_model.safetensors")),
-        3,
-        3,
-        cfg.to_candle(),
+        &cfg,
     )
     .unwrap();
     assert_close(

@@ -27,17 +27,10 @@ pub(crate) struct CandleHed {
 impl CandleHed {
     pub(crate) fn load(path: &Path, device: &Device) -> Result<Self, HedError> {
         let bad = |e: candle_core::Error| HedError::Format(e.to_string());
-        let is_safetensors = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("safetensors"));
-        let tensors: HashMap<String, Tensor> = if is_safetensors {
-            candle_core::safetensors::load(path, device).map_err(bad)?
-        } else {
-            candle_core::pickle::read_all(path)
-                .map_err(bad)?
-                .into_iter()
-                .collect()
-        };
+        // The shared reader checks a .pth's declared lengths and shapes before candle
+        // allocates them (a truncated or hostile file is an error, not gigabytes).
+        let tensors: HashMap<String, Tensor> = gait_core::checkpoint::read_tensors(path)
+            .map_err(|e| HedError::Format(e.to_string()))?;
         let mut checked = HashMap::new();
         for (name, shape) in tensor_specs() {
             let t = tensors.get(&name).ok_or_else(|| HedError::MissingTensor {

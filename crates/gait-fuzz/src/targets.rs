@@ -126,10 +126,20 @@ fn tflite(_: &Scratch, b: &[u8]) {
     let _ = gait_tflite::Graph::parse(b);
 }
 
+/// A parsed graph built as the pose stage builds it: compiled for candle and
+/// converted to ONNX (declared shapes size the buffers of both).
+fn tflite_graph(_: &Scratch, b: &[u8]) {
+    if let Ok(g) = gait_tflite::Graph::parse(b) {
+        let _ = gait_tflite::CandleGraph::new(&g);
+        let _ = gait_tflite::to_onnx(&g);
+    }
+}
+
 fn safetensors(_: &Scratch, b: &[u8]) {
     let _ = candle_core::safetensors::load_buffer(b, &candle_core::Device::Cpu);
 }
 
+/// OpenPose's and HED's `.pth` reader (`gait_core::checkpoint`, shared).
 fn pth(s: &Scratch, b: &[u8]) {
     let _ = gait_pose::openpose::net::read_checkpoint(&s.file("model.pth", b));
 }
@@ -147,6 +157,10 @@ fn image(s: &Scratch, b: &[u8]) {
     {
         let _ = frames.next_frame();
     }
+}
+
+fn ffprobe_json(s: &Scratch, b: &[u8]) {
+    let _ = gait_pipeline::input::parse_ffprobe(&s.path().join("clip.mp4"), b);
 }
 
 fn video(s: &Scratch, b: &[u8]) {
@@ -224,6 +238,15 @@ pub const TARGETS: &[Target] = &[
         run: tflite,
     },
     Target {
+        name: "tflite_graph",
+        seeds: &[
+            "target/models/blazepose/selfie_segmentation.tflite",
+            "target/models/blazepose/pose_detection.tflite",
+        ],
+        ext: "tflite",
+        run: tflite_graph,
+    },
+    Target {
         name: "safetensors",
         seeds: &["crates/gait-edge/tests/fixtures/hed/expected.safetensors"],
         ext: "safetensors",
@@ -250,6 +273,12 @@ pub const TARGETS: &[Target] = &[
         ],
         ext: "png",
         run: image,
+    },
+    Target {
+        name: "ffprobe_json",
+        seeds: &["fuzz/seeds/ffprobe_json"],
+        ext: "json",
+        run: ffprobe_json,
     },
     Target {
         name: "video",

@@ -197,26 +197,49 @@ fn probe_video(path: &Path) -> Result<InputInfo, PipelineError> {
         .stdin(Stdio::null())
         .output()
         .map_err(|e| ffmpeg_missing(path, e))?;
-    let bad = |why: &str| {
-        PipelineError::input(
-            path,
-            format!("not a readable video ({why}); check the file or re-encode it"),
-        )
-    };
     if !out.status.success() {
         let msg = String::from_utf8_lossy(&out.stderr);
-        return Err(bad(msg.lines().next().unwrap_or("ffprobe failed").trim()));
+        let why = msg.lines().next().unwrap_or("ffprobe failed").trim();
+        return Err(not_a_video(path, why));
     }
+    parse_ffprobe(path, &out.stdout)
+}
+
+fn not_a_video(path: &Path, why: &str) -> PipelineError {
+    PipelineError::input(
+        path,
+        format!("not a readable video ({why}); check the file or re-encode it"),
+    )
+}
+
+/// The largest frame a video may declare: 8192 x 8192 pixels (8K video is 7680 x 4320), so
+/// a hostile container cannot make each frame's buffer gigabytes.
+pub const MAX_FRAME_PIXELS: u64 = 8192 * 8192;
+
+/// The video's size, rate and frame count from ffprobe's JSON output for `path` (public
+/// for the fuzzer, which feeds it arbitrary bytes).
+pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineError> {
+    let bad = |why: &str| not_a_video(path, why);
     let json: serde_json::Value =
-        serde_json::from_slice(&out.stdout).map_err(|_| bad("ffprobe output unreadable"))?;
+        serde_json::from_slice(stdout).map_err(|_| bad("ffprobe output unreadable"))?;
     let stream = json["streams"]
         .get(0)
         .ok_or_else(|| bad("no video stream"))?;
-    let dim = |k: &str| stream[k].as_u64().filter(|v| *v > 0).map(|v| v as u32);
+    let dim = |k: &str| {
+        stream[k]
+            .as_u64()
+            .filter(|v| *v > 0)
+            .and_then(|v| u32::try_from(v).ok())
+    };
     let (mut width, mut height) = match (dim("width"), dim("height")) {
         (Some(w), Some(h)) => (w, h),
         _ => return Err(bad("no frame size")),
     };
+    if width as u64 * height as u64 > MAX_FRAME_PIXELS {
+        return Err(bad(&format!(
+            "frames of {width}x{height} pixels; at most 8192x8192 are read"
+        )));
+    }
     let rotation = stream["side_data_list"]
         .as_array()
         .and_then(|l| l.iter().find_map(|d| d["rotation"].as_i64()))
@@ -230,7 +253,9 @@ fn probe_video(path: &Path) -> Result<InputInfo, PipelineError> {
         .and_then(|r| {
             let (n, d) = r.split_once('/')?;
             let (n, d): (f64, f64) = (n.parse().ok()?, d.parse().ok()?);
-            (d > 0.0 && n > 0.0).then(|| n / d)
+            // "inf/1" parses too; a camera rate is finite and below 10^5 frames per second.
+            let fps = n / d;
+            (d > 0.0 && n > 0.0 && fps.is_finite() && fps <= 1e5).then_some(fps)
         })
         .ok_or_else(|| bad("no frame rate"))?;
     let frames = stream["nb_frames"].as_str().and_then(|n| n.parse().ok());
@@ -378,6 +403,36 @@ mod tests {
             .map(|f| f.image.get_pixel(0, 0)[0])
             .collect();
         assert_eq!(reds, vec![2, 1, 0]);
+    }
+
+    #[test]
+    fn hostile_ffprobe_descriptions_are_refused() {
+        let p = Path::new("clip.mp4");
+        let probe = |w: u64, h: u64, rate: &str| {
+            let json = format!(
+                r#"{{"streams": [{{"width": {w}, "height": {h}, "r_frame_rate": "{rate}", "nb_frames": "1000000000"}}]}}"#
+            );
+            parse_ffprobe(p, json.as_bytes()).map_err(|e| e.to_string())
+        };
+        let ok = probe(1768, 994, "30/1").unwrap();
+        assert_eq!((ok.width, ok.height, ok.fps), (1768, 994, 30.0));
+        assert!(
+            probe(100_000, 100_000, "30/1")
+                .unwrap_err()
+                .contains("at most 8192x8192")
+        );
+        // A width past u32 is no frame size, not a wrapped one.
+        assert!(
+            probe(1 << 33, 10, "30/1")
+                .unwrap_err()
+                .contains("no frame size")
+        );
+        for rate in ["inf/1", "NaN/1", "30/0", "1e300/1e-300"] {
+            assert!(
+                probe(64, 48, rate).unwrap_err().contains("no frame rate"),
+                "{rate}"
+            );
+        }
     }
 
     #[test]

@@ -10,7 +10,7 @@ use candle_nn::VarBuilder;
 use rayon::prelude::*;
 
 use super::cpu::{self, SharedMut, View};
-use super::linear::{Linear, linear, linear_no_bias};
+use super::linear::{Linear, linear, linear_no_bias, square_linear_or_conv1x1};
 use super::sgemm::{self, MR, NR};
 
 /// Queries per task of the fused kernel (two register-tile strips): their
@@ -40,6 +40,25 @@ impl Attention {
             to_v: linear_no_bias(context_dim, dim, vb.pp("to_v"))?,
             to_out: linear(dim, dim, vb.pp("to_out").pp(0))?,
             heads,
+        })
+    }
+
+    /// One-head self-attention with biased projections, as in the VAE's mid
+    /// block (diffusers' `Attention` with `bias=True`, head width `dim`).
+    /// Older checkpoints name them `query`, `key`, `value`, `proj_attn`.
+    pub fn vae(vb: VarBuilder, dim: usize) -> Result<Self> {
+        let names = if vb.contains_tensor("to_q.weight") {
+            ["to_q", "to_k", "to_v", "to_out.0"]
+        } else {
+            ["query", "key", "value", "proj_attn"]
+        };
+        let proj = |name: &str| square_linear_or_conv1x1(dim, vb.pp(name));
+        Ok(Self {
+            to_q: proj(names[0])?,
+            to_k: proj(names[1])?,
+            to_v: proj(names[2])?,
+            to_out: proj(names[3])?,
+            heads: 1,
         })
     }
 

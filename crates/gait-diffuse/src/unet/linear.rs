@@ -29,6 +29,18 @@ pub fn linear_no_bias(in_dim: usize, out_dim: usize, vb: VarBuilder) -> Result<L
     })
 }
 
+/// `dim -> dim` with a bias whose weight may also be stored as a 1x1
+/// convolution `(dim, dim, 1, 1)` (older VAE checkpoints' attention).
+pub fn square_linear_or_conv1x1(dim: usize, vb: VarBuilder) -> Result<Linear> {
+    let weight = match vb.get((dim, dim), "weight") {
+        Ok(w) => w,
+        Err(_) => vb.get((dim, dim, 1, 1), "weight")?.reshape((dim, dim))?,
+    };
+    Ok(Linear {
+        inner: candle_nn::Linear::new(weight, Some(vb.get(dim, "bias")?)),
+    })
+}
+
 impl Module for Linear {
     fn forward(&self, x: &Tensor) -> Result<Tensor> {
         let w = self.inner.weight();

@@ -31,3 +31,5 @@ pub use conv::{Conv2d, conv2d};
 pub use embeddings::{TimestepEmbedding, Timesteps};
 pub use linear::{Linear, linear, linear_no_bias};
 pub use model::UNet2DConditionModel;
+pub use norm::{GroupNorm, group_norm};
+pub use resnet::{ResnetBlock2D, ResnetSpec};

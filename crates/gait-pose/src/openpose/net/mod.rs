@@ -1,12 +1,12 @@
 //! The OpenPose networks: COCO-18 body model on candle (from `body_pose_model.pth`) and ONNX exports on ort.
 
-mod checkpoint;
 mod coco18;
 mod ort_net;
 
 use std::collections::HashMap;
 use std::path::Path;
 
+use gait_core::checkpoint;
 use gait_core::{Backend, StageError};
 
 use super::{OpenposeModel, OpenposeNet};

@@ -1,6 +1,8 @@
 //! Reading a checkpoint's tensors by name: PyTorch `.pth` (the zip format of
 //! torch >= 1.6 through `candle_core::pickle`, and the older "legacy" format,
-//! which `body_pose_model.pth` may well be in) and `.safetensors`.
+//! which `body_pose_model.pth` may well be in) and `.safetensors`. Shared by
+//! the stages that load PyTorch weights (OpenPose, HED), so every one gets the
+//! same checks of declared lengths and shapes before candle allocates them.
 
 use std::collections::HashMap;
 use std::io::Read;
@@ -9,7 +11,10 @@ use std::path::Path;
 use candle_core::pickle::{Object, Stack, TensorInfo};
 use candle_core::{DType, Device, Tensor};
 
-use super::WeightsError;
+/// Why a checkpoint could not be read (one line, for the model error).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct CheckpointError(String);
 
 /// `torch.save`'s legacy format starts with a pickle (protocol 2) of this
 /// magic number (a 10-byte long): `\x80\x02\x8a\x0a` + its bytes + STOP.
@@ -18,29 +23,32 @@ const LEGACY_MAGIC: [u8; 15] = [
 ];
 const ZIP_MAGIC: [u8; 4] = *b"PK\x03\x04";
 
-fn read_err(e: impl ToString) -> WeightsError {
-    WeightsError::Read(e.to_string())
+fn read_err(e: impl ToString) -> CheckpointError {
+    CheckpointError(e.to_string())
 }
 
 /// Every tensor in the file, converted to f32, by name.
-pub(crate) fn read_tensors(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
+pub fn read_tensors(path: &Path) -> Result<HashMap<String, Tensor>, CheckpointError> {
     let mut head = [0u8; 15];
     let n = std::fs::File::open(path)
         .and_then(|mut f| f.read(&mut head))
         .map_err(read_err)?;
     let head = &head[..n];
     // candle's readers index into what the file declares and can panic on a malformed one.
-    let guarded = |f: fn(&Path) -> Result<HashMap<String, Tensor>, WeightsError>| {
-        gait_core::guard::quietly("reading the checkpoint", || f(path)).map_err(read_err)?
+    let guarded = |f: fn(&Path) -> Result<HashMap<String, Tensor>, CheckpointError>| {
+        crate::guard::quietly("reading the checkpoint", || f(path)).map_err(read_err)?
     };
-    let tensors = if path.extension().is_some_and(|e| e == "safetensors") {
+    let tensors = if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("safetensors"))
+    {
         candle_core::safetensors::load(path, &Device::Cpu).map_err(read_err)?
     } else if head.starts_with(&ZIP_MAGIC) {
         guarded(read_zip_pth)?
     } else if head == LEGACY_MAGIC {
         guarded(read_legacy_pth)?
     } else {
-        return Err(WeightsError::Read(
+        return Err(CheckpointError(
             "neither a PyTorch checkpoint (.pth, zip or legacy format) nor .safetensors".into(),
         ));
     };
@@ -59,7 +67,7 @@ pub(crate) fn read_tensors(path: &Path) -> Result<HashMap<String, Tensor>, Weigh
 
 /// The entries of a zip checkpoint with their sizes, after checking the pickle's declared
 /// lengths (candle allocates them before reading).
-fn zip_entries(path: &Path) -> Result<HashMap<String, u64>, WeightsError> {
+fn zip_entries(path: &Path) -> Result<HashMap<String, u64>, CheckpointError> {
     let file = std::fs::File::open(path).map_err(read_err)?;
     let mut zip = zip::ZipArchive::new(file).map_err(read_err)?;
     let mut sizes = HashMap::new();
@@ -73,7 +81,7 @@ fn zip_entries(path: &Path) -> Result<HashMap<String, u64>, WeightsError> {
                 .take(MAX_PICKLE)
                 .read_to_end(&mut pickle)
                 .map_err(read_err)?;
-            gait_core::pickle_guard::check(&pickle).map_err(read_err)?;
+            crate::pickle_guard::check(&pickle).map_err(read_err)?;
         }
         sizes.insert(name, entry.size());
     }
@@ -83,7 +91,7 @@ fn zip_entries(path: &Path) -> Result<HashMap<String, u64>, WeightsError> {
 /// The largest pickle of names and shapes read from a zip checkpoint.
 const MAX_PICKLE: u64 = 256 << 20;
 
-fn read_zip_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
+fn read_zip_pth(path: &Path) -> Result<HashMap<String, Tensor>, CheckpointError> {
     let sizes = zip_entries(path)?;
     let pth = candle_core::pickle::PthTensors::new(path, None).map_err(read_err)?;
     // A tensor's declared shape must fit in its storage entry before candle allocates it.
@@ -96,7 +104,7 @@ fn read_zip_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
             .and_then(|n| n.checked_add(info.layout.start_offset() * info.dtype.size_in_bytes()));
         let have = sizes.get(&info.path).copied().unwrap_or(0);
         if need.is_none_or(|n| n as u64 > have) {
-            return Err(WeightsError::Read(format!(
+            return Err(CheckpointError(format!(
                 "tensor `{name}` declares shape {:?} but its storage `{}` holds {have} bytes",
                 info.layout.dims(),
                 info.path
@@ -107,8 +115,8 @@ fn read_zip_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
     for name in pth.tensor_infos().keys() {
         let t = pth
             .get(name)
-            .map_err(|e| WeightsError::Read(format!("tensor `{name}`: {e}")))?
-            .ok_or_else(|| WeightsError::Read(format!("tensor `{name}` vanished")))?;
+            .map_err(|e| CheckpointError(format!("tensor `{name}`: {e}")))?
+            .ok_or_else(|| CheckpointError(format!("tensor `{name}` vanished")))?;
         out.insert(name.clone(), t);
     }
     Ok(out)
@@ -118,7 +126,7 @@ fn read_zip_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
 /// system info and the object (whose tensors name storages by key), then a
 /// pickled list of storage keys, then each storage as a little-endian u64
 /// element count followed by its raw bytes.
-fn read_legacy_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError> {
+fn read_legacy_pth(path: &Path) -> Result<HashMap<String, Tensor>, CheckpointError> {
     // In memory, so that each pickle's declared lengths can be checked before candle reads it.
     let bytes = std::fs::read(path).map_err(read_err)?;
     let mut r = std::io::Cursor::new(bytes.as_slice());
@@ -128,7 +136,7 @@ fn read_legacy_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError>
     let _protocol = unpickle(&mut r)?;
     let _sys_info = unpickle(&mut r)?;
     let Object::Dict(entries) = unpickle(&mut r)? else {
-        return Err(WeightsError::Read(
+        return Err(CheckpointError(
             "the checkpoint is not a dict of tensors (a state_dict)".into(),
         ));
     };
@@ -200,9 +208,9 @@ fn read_legacy_pth(path: &Path) -> Result<HashMap<String, Tensor>, WeightsError>
     Ok(out)
 }
 
-fn unpickle(r: &mut std::io::Cursor<&[u8]>) -> Result<Object, WeightsError> {
+fn unpickle(r: &mut std::io::Cursor<&[u8]>) -> Result<Object, CheckpointError> {
     let at = (r.position() as usize).min(r.get_ref().len());
-    gait_core::pickle_guard::check(&r.get_ref()[at..]).map_err(read_err)?;
+    crate::pickle_guard::check(&r.get_ref()[at..]).map_err(read_err)?;
     let mut stack = Stack::empty();
     stack.read_loop(r).map_err(read_err)?;
     stack.finalize().map_err(read_err)
