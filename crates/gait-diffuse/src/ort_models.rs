@@ -173,6 +173,9 @@ fn residual_names(n: usize) -> Vec<String> {
         .collect()
 }
 
+/// A sample shape and the residual shapes the ControlNet gives for it.
+type ShapesOf = (Vec<usize>, Vec<Vec<usize>>);
+
 /// ControlNet + UNet on ONNX Runtime: what one denoising step runs.
 pub struct OrtDenoiser {
     controlnet: OnnxNet,
@@ -180,7 +183,7 @@ pub struct OrtDenoiser {
     /// Skip-connection residuals (12 for SD 1.5).
     residuals: usize,
     /// Residual shapes by sample shape, for the steps the ControlNet skips.
-    residual_shapes: Mutex<Vec<(Vec<usize>, Vec<Vec<usize>>)>>,
+    residual_shapes: Mutex<Vec<ShapesOf>>,
 }
 
 impl OrtDenoiser {
@@ -275,7 +278,7 @@ impl OrtDenoiser {
         })
     }
 
-    fn lock_shapes(&self) -> std::sync::MutexGuard<'_, Vec<(Vec<usize>, Vec<Vec<usize>>)>> {
+    fn lock_shapes(&self) -> std::sync::MutexGuard<'_, Vec<ShapesOf>> {
         // A panic elsewhere cannot leave the list half-written: pushes are whole.
         self.residual_shapes
             .lock()
