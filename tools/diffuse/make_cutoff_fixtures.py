@@ -27,25 +27,21 @@ import os
 
 import torch
 from diffusers import (
-    AutoencoderKL,
-    ControlNetModel,
     DDIMScheduler,
     DPMSolverMultistepScheduler,
     StableDiffusionControlNetImg2ImgPipeline,
     StableDiffusionControlNetInpaintPipeline,
     StableDiffusionControlNetPipeline,
-    UNet2DConditionModel,
     UniPCMultistepScheduler,
 )
 from diffusers.models.autoencoders import vae as vae_module
 from diffusers.pipelines.controlnet import pipeline_controlnet_img2img, pipeline_controlnet_inpaint
 from PIL import Image
 from safetensors.torch import load_file, save_file
-from transformers import CLIPTextModel
 
 from cfg_cutoff import cutoff_kwargs
 from make_fixtures import SCHED_KW
-from make_modes_fixtures import COND_SCALE, GUIDANCE, FIX, TINY, fixed
+from make_modes_fixtures import COND_SCALE, GUIDANCE, FIX, fixed, load_tiny
 
 SCHEDULERS = {"ddim": DDIMScheduler, "unipc": UniPCMultistepScheduler, "dpmpp2m": DPMSolverMultistepScheduler}
 
@@ -61,16 +57,7 @@ CASES = [
 
 
 def main():
-    f32 = torch.float32
-    unet = UNet2DConditionModel.from_pretrained(os.path.join(TINY, "unet"), torch_dtype=f32).eval()
-    controlnet = ControlNetModel.from_pretrained(os.path.join(TINY, "controlnet"), torch_dtype=f32).eval()
-    vae = AutoencoderKL.from_pretrained(os.path.join(TINY, "vae"), torch_dtype=f32).eval()
-    text = CLIPTextModel.from_pretrained(os.path.join(TINY, "text_encoder"), torch_dtype=f32).eval()
-    with open(os.path.join(FIX, "tokenizer_cases.json")) as f:
-        cases = json.load(f)
-    with torch.no_grad():
-        pos = text(torch.tensor([cases[0]["ids"]]))[0]
-        neg = text(torch.tensor([cases[1]["ids"]]))[0]
+    unet, controlnet, vae, text, pos, neg = load_tiny()
     m = load_file(os.path.join(FIX, "modes.safetensors"))
     frame = Image.fromarray(m["modes.frame"].to(torch.uint8).numpy())
     control = Image.fromarray(m["modes.edge"].to(torch.uint8).numpy()).convert("RGB")

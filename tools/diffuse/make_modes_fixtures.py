@@ -76,7 +76,9 @@ def fixed(t, what):
     return randn_tensor
 
 
-def main():
+def load_tiny():
+    """The tiny models in f32 and the paper's prompt and negative prompt embeddings (from the
+    committed CLIP ids of tokenizer_cases.json)."""
     f32 = torch.float32
     unet = UNet2DConditionModel.from_pretrained(os.path.join(TINY, "unet"), torch_dtype=f32).eval()
     controlnet = ControlNetModel.from_pretrained(os.path.join(TINY, "controlnet"), torch_dtype=f32).eval()
@@ -87,6 +89,11 @@ def main():
     with torch.no_grad():
         pos = text(torch.tensor([cases[0]["ids"]]))[0]
         neg = text(torch.tensor([cases[1]["ids"]]))[0]
+    return unet, controlnet, vae, text, pos, neg
+
+
+def main():
+    unet, controlnet, vae, text, pos, neg = load_tiny()
 
     g = torch.Generator().manual_seed(20)
     exp = {}
