@@ -150,6 +150,28 @@ impl Builder {
 }
 
 /// The ONNX model bytes of `graph`.
+/// Padding after the input so that `out` outputs fit: a hostile graph may declare
+/// empty or huge sizes, so the arithmetic is checked (found by the `tflite_graph` fuzz target).
+fn pad_after(
+    out: usize,
+    stride: usize,
+    k: usize,
+    dilation: usize,
+    padded_in: usize,
+) -> Result<usize, String> {
+    let span = out
+        .checked_sub(1)
+        .and_then(|o| o.checked_mul(stride))
+        .zip(k.checked_sub(1).and_then(|k| k.checked_mul(dilation)))
+        .and_then(|(a, b)| a.checked_add(b)?.checked_add(1))
+        .ok_or_else(|| {
+            format!(
+                "convolution with output size {out}, kernel {k}, stride {stride}: not a valid layer"
+            )
+        })?;
+    Ok(span.saturating_sub(padded_in))
+}
+
 pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
     let mut b = Builder {
         graph: Pb::default(),
@@ -239,10 +261,8 @@ pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
                 b.init(f32_tensor(&bn, &[oc], &bias));
                 let (_, pt) = same::axis(xs[1], kh, stride.0, dilation.0, padding);
                 let (_, pl) = same::axis(xs[2], kw, stride.1, dilation.1, padding);
-                let pb =
-                    ((os[1] - 1) * stride.0 + (kh - 1) * dilation.0 + 1).saturating_sub(xs[1] + pt);
-                let pr =
-                    ((os[2] - 1) * stride.1 + (kw - 1) * dilation.1 + 1).saturating_sub(xs[2] + pl);
+                let pb = pad_after(os[1], stride.0, kh, dilation.0, xs[1] + pt)?;
+                let pr = pad_after(os[2], stride.1, kw, dilation.1, xs[2] + pl)?;
                 let mut attrs = vec![
                     ("kernel_shape", Attr::Ints(vec![kh as i64, kw as i64])),
                     (
