@@ -12,7 +12,9 @@ mod onnx;
 mod same;
 
 pub use candle::CandleGraph;
-pub use model::{Activation, DType, Graph, Op, OpOptions, Operator, Padding, Tensor};
+pub use model::{
+    Activation, DType, Graph, MAX_TENSOR_ELEMENTS, Op, OpOptions, Operator, Padding, Tensor,
+};
 pub use onnx::to_onnx;
 
 /// Why a `.tflite` file cannot be read.

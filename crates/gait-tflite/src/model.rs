@@ -345,6 +345,9 @@ fn sparsity(t: Table) -> R<Sparsity> {
     })
 }
 
+/// The most elements one tensor may declare (64 MiB as float32; BlazePose's largest is under 10^6).
+pub const MAX_TENSOR_ELEMENTS: usize = 1 << 24;
+
 impl Graph {
     /// Parses a `.tflite` file's bytes.
     pub fn parse(bytes: &[u8]) -> R<Self> {
@@ -388,6 +391,14 @@ impl Graph {
                 .collect::<R<Vec<_>>>()?;
             let dtype = DType::from_code(t.u8_or(1, 0)?);
             let name = t.string(3)?;
+            // Activations have no data to check their shape against, and both backends
+            // allocate what the shape declares: refuse absurd ones before anything runs.
+            let elems = shape.iter().try_fold(1usize, |a, &n| a.checked_mul(n));
+            if elems.is_none_or(|n| n > MAX_TENSOR_ELEMENTS) {
+                return Err(TfliteError::Unsupported(format!(
+                    "tensor {name} of shape {shape:?} (over {MAX_TENSOR_ELEMENTS} elements)"
+                )));
+            }
             let bidx = t.u32_or(2, 0)? as usize;
             let mut data = match buffers.get(bidx) {
                 Some(b) if bidx > 0 => buffer_bytes(bytes, b)?,

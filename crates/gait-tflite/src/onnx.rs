@@ -2,163 +2,436 @@
 //! by hand. Activations are NCHW inside; the input is taken NHWC and 4-D
 //! outputs are given back NHWC, like the TFLite model.
 
-use crate::model::{Activation, Graph, Op, OpOptions};
+mod builder;
+mod proto;
+
+use builder::Builder;
+use proto::{Attr, Pb, f32_tensor, i64_tensor, value_info};
+
+use crate::model::{Activation, Graph, Op, OpOptions, Operator, Padding, Tensor};
 use crate::same::{self, nchw_axis};
 
-/// Protobuf writer: fields are appended as (tag, payload).
-#[derive(Default)]
-struct Pb(Vec<u8>);
+type R<T> = Result<T, String>;
 
-impl Pb {
-    fn varint(&mut self, mut v: u64) {
-        while v >= 0x80 {
-            self.0.push((v as u8) | 0x80);
-            v >>= 7;
-        }
-        self.0.push(v as u8);
-    }
-    fn int(&mut self, field: u32, v: i64) -> &mut Self {
-        self.varint((field as u64) << 3);
-        self.varint(v as u64);
-        self
-    }
-    fn bytes(&mut self, field: u32, b: &[u8]) -> &mut Self {
-        self.varint(((field as u64) << 3) | 2);
-        self.varint(b.len() as u64);
-        self.0.extend_from_slice(b);
-        self
-    }
-    fn str(&mut self, field: u32, s: &str) -> &mut Self {
-        self.bytes(field, s.as_bytes())
-    }
-    fn msg(&mut self, field: u32, m: Pb) -> &mut Self {
-        self.bytes(field, &m.0)
-    }
-}
-
-enum Attr {
-    Int(i64),
-    Ints(Vec<i64>),
-    Str(&'static str),
-}
-
-fn attr(name: &str, a: Attr) -> Pb {
-    let mut p = Pb::default();
-    p.str(1, name);
-    match a {
-        Attr::Int(i) => p.int(3, i).int(20, 2),
-        Attr::Str(s) => p.bytes(4, s.as_bytes()).int(20, 3),
-        Attr::Ints(v) => {
-            for i in v {
-                p.int(8, i);
-            }
-            p.int(20, 7)
-        }
+/// The ONNX model bytes of `graph`.
+pub fn to_onnx(graph: &Graph) -> R<Vec<u8>> {
+    let mut e = Exporter {
+        b: Builder::new(),
+        t: &graph.tensors,
+        konst: graph.tensors.iter().map(|t| t.f32s()).collect(),
     };
-    p
-}
-
-fn tensor(name: &str, dims: &[usize], data_type: i64, raw: Vec<u8>) -> Pb {
-    let mut p = Pb::default();
-    for &d in dims {
-        p.int(1, d as i64);
+    e.input(graph)?;
+    for (k, op) in graph.operators.iter().enumerate() {
+        let mut io = Io::new(k, op)?;
+        io.pre = e.b.fresh("pre");
+        e.operator(&io, op)?;
     }
-    p.int(2, data_type).str(8, name).bytes(9, &raw);
-    p
+    e.outputs(graph);
+    Ok(e.model())
 }
 
-fn f32_tensor(name: &str, dims: &[usize], v: &[f32]) -> Pb {
-    tensor(
-        name,
-        dims,
-        1,
-        v.iter().flat_map(|x| x.to_le_bytes()).collect(),
-    )
+/// One operator's tensors: its given inputs and its (first) output.
+struct Io {
+    k: usize,
+    ins: Vec<usize>,
+    out: usize,
+    /// The name of the value before the fused activation.
+    pre: String,
 }
 
-fn i64_tensor(name: &str, v: &[i64]) -> Pb {
-    tensor(
-        name,
-        &[v.len()],
-        7,
-        v.iter().flat_map(|x| x.to_le_bytes()).collect(),
-    )
-}
-
-fn value_info(name: &str, dims: &[usize]) -> Pb {
-    let mut shape = Pb::default();
-    for &d in dims {
-        let mut dim = Pb::default();
-        dim.int(1, d as i64);
-        shape.msg(1, dim);
+impl Io {
+    fn new(k: usize, op: &Operator) -> R<Self> {
+        let ins = op
+            .inputs
+            .iter()
+            .filter(|&&i| i >= 0)
+            .map(|&i| i as usize)
+            .collect();
+        let out = *op
+            .outputs
+            .first()
+            .ok_or(format!("operator {k} has no output"))? as usize;
+        Ok(Io {
+            k,
+            ins,
+            out,
+            pre: String::new(),
+        })
     }
-    let mut tt = Pb::default();
-    tt.int(1, 1).msg(2, shape);
-    let mut ty = Pb::default();
-    ty.msg(1, tt);
-    let mut p = Pb::default();
-    p.str(1, name).msg(2, ty);
-    p
+
+    fn input(&self, j: usize) -> R<usize> {
+        self.ins
+            .get(j)
+            .copied()
+            .ok_or(format!("operator {}: missing input {j}", self.k))
+    }
 }
 
-struct Builder {
-    graph: Pb,
-    count: usize,
+/// The ONNX name of TFLite tensor `i`.
+fn name(i: usize) -> String {
+    format!("t{i}")
 }
 
-impl Builder {
-    fn node(&mut self, op: &str, inputs: &[&str], output: &str, attrs: Vec<(&str, Attr)>) {
-        let mut n = Pb::default();
-        for i in inputs {
-            n.str(1, i);
-        }
-        n.str(2, output)
-            .str(3, &format!("n{}", self.count))
-            .str(4, op);
-        for (name, a) in attrs {
-            n.msg(5, attr(name, a));
-        }
-        self.count += 1;
-        self.graph.msg(1, n);
+/// A 2-D convolution's or pooling's window.
+struct Window {
+    kernel: (usize, usize),
+    stride: (usize, usize),
+    dilation: (usize, usize),
+    padding: Padding,
+}
+
+struct Exporter<'g> {
+    b: Builder,
+    t: &'g [Tensor],
+    /// Constant values, including those dequantized or densified by earlier operators.
+    konst: Vec<Option<Vec<f32>>>,
+}
+
+impl Exporter<'_> {
+    fn constant(&self, io: &Io, i: usize) -> R<&[f32]> {
+        self.konst[i]
+            .as_deref()
+            .ok_or(format!("operator {}: input {i} not constant", io.k))
     }
-    fn init(&mut self, t: Pb) {
-        self.graph.msg(5, t);
+
+    fn shape4(&self, io: &Io, i: usize, what: &str) -> R<[usize; 4]> {
+        let s = &self.t[i].shape;
+        s[..]
+            .try_into()
+            .map_err(|_| format!("operator {}: {what} {s:?} is not 4-D", io.k))
     }
-    fn fresh(&mut self, base: &str) -> String {
-        self.count += 1;
-        format!("{base}__{}", self.count)
+
+    /// The graph input, NHWC, transposed to NCHW.
+    fn input(&mut self, graph: &Graph) -> R<()> {
+        let input = *graph.inputs.first().ok_or("graph has no input")?;
+        self.b
+            .graph
+            .msg(11, value_info("input", &self.t[input].shape));
+        self.b.node(
+            "Transpose",
+            &["input"],
+            &name(input),
+            vec![("perm", Attr::Ints(vec![0, 3, 1, 2]))],
+        );
+        Ok(())
     }
-    fn activation(&mut self, act: Activation, x: &str, out: &str) -> Result<(), String> {
-        match act {
-            Activation::None => self.node("Identity", &[x], out, vec![]),
-            Activation::Relu => self.node("Relu", &[x], out, vec![]),
-            Activation::Relu6 | Activation::ReluN1To1 => {
-                let (lo, hi) = if act == Activation::Relu6 {
-                    (0.0, 6.0)
-                } else {
-                    (-1.0, 1.0)
-                };
-                let (a, b) = (self.fresh("lo"), self.fresh("hi"));
-                self.init(f32_tensor(&a, &[], &[lo]));
-                self.init(f32_tensor(&b, &[], &[hi]));
-                self.node("Clip", &[x, &a, &b], out, vec![]);
+
+    fn operator(&mut self, io: &Io, op: &Operator) -> R<()> {
+        let k = io.k;
+        match (&op.op, &op.options) {
+            (Op::Dequantize | Op::Densify, _) => {
+                self.konst[io.out] = Some(self.constant(io, io.input(0)?)?.to_vec());
             }
-            Activation::Tanh => self.node("Tanh", &[x], out, vec![]),
+            (
+                Op::Conv2d,
+                &OpOptions::Conv {
+                    padding,
+                    stride,
+                    dilation,
+                    activation,
+                },
+            ) => {
+                let w = Window::of(stride, dilation, padding);
+                self.conv(io, w, activation, false)?
+            }
+            (
+                Op::DepthwiseConv2d,
+                &OpOptions::Depthwise {
+                    padding,
+                    stride,
+                    dilation,
+                    activation,
+                    ..
+                },
+            ) => {
+                let w = Window::of(stride, dilation, padding);
+                self.conv(io, w, activation, true)?
+            }
+            (Op::Add, &OpOptions::Add { activation }) => self.binary(io, "Add", activation)?,
+            (Op::Mul, &OpOptions::Add { activation }) => self.binary(io, "Mul", activation)?,
+            (Op::Pad, _) => self.pad(io)?,
+            (Op::Reshape, _) => self.reshape(io)?,
+            (Op::Concatenation, &OpOptions::Concat { axis, activation }) => {
+                self.concat(io, axis, activation)?
+            }
+            (
+                Op::MaxPool2d,
+                &OpOptions::Pool {
+                    padding,
+                    stride,
+                    filter,
+                    activation,
+                },
+            ) => {
+                let mut w = Window::of(stride, (1, 1), padding);
+                w.kernel = filter;
+                self.max_pool(io, w, activation)?
+            }
+            (
+                Op::ResizeBilinear,
+                &OpOptions::Resize {
+                    align_corners,
+                    half_pixel_centers,
+                },
+            ) => self.resize(io, align_corners, half_pixel_centers)?,
+            (Op::DepthToSpace, &OpOptions::DepthToSpace { block }) => {
+                let attrs = vec![
+                    ("blocksize", Attr::Int(block as i64)),
+                    ("mode", Attr::Str("DCR")),
+                ];
+                self.unary(io, "DepthToSpace", attrs)?
+            }
+            (Op::Logistic, _) => self.unary(io, "Sigmoid", vec![])?,
+            (Op::Relu, _) => self.unary(io, "Relu", vec![])?,
+            (Op::Relu6, _) => {
+                let x = name(io.input(0)?);
+                self.b.activation(Activation::Relu6, &x, &name(io.out))
+            }
+            (other, _) => return Err(format!("operator {k}: {other:?} cannot be exported")),
         }
         Ok(())
     }
+
+    /// A one-input node straight from the operator's input to its output.
+    fn unary(&mut self, io: &Io, op: &str, attrs: Vec<(&str, Attr)>) -> R<()> {
+        let x = name(io.input(0)?);
+        self.b.node(op, &[&x], &name(io.out), attrs);
+        Ok(())
+    }
+
+    fn conv(&mut self, io: &Io, mut win: Window, act: Activation, depthwise: bool) -> R<()> {
+        let (xi, wi) = (io.input(0)?, io.input(1)?);
+        let xs = self.shape4(io, xi, "input")?;
+        let ws = self.shape4(io, wi, "weights")?;
+        let os = self.shape4(io, io.out, "output")?;
+        if depthwise && ws[0] != 1 {
+            return Err(format!("operator {}: depthwise weights {ws:?}", io.k));
+        }
+        win.kernel = (ws[1], ws[2]);
+        let pads = self.pads(&win, xs, os)?;
+        let (oc, ic) = if depthwise {
+            (ws[3], 1)
+        } else {
+            (ws[0], ws[3])
+        };
+        let wt = oihw(self.constant(io, wi)?, ws, depthwise);
+        let bias = match io.ins.get(2) {
+            Some(&bi) => self.constant(io, bi)?.to_vec(),
+            None => vec![0.0; oc],
+        };
+        let (wn, bn, pre) = (self.b.fresh("w"), self.b.fresh("b"), &io.pre);
+        self.b.init(f32_tensor(&wn, &[oc, ic, ws[1], ws[2]], &wt));
+        self.b.init(f32_tensor(&bn, &[oc], &bias));
+        let mut attrs = Builder::window_attrs(win.kernel, win.stride, Some(win.dilation), pads);
+        if depthwise {
+            attrs.push(("group", Attr::Int(xs[3] as i64)));
+        }
+        self.b.node("Conv", &[&name(xi), &wn, &bn], pre, attrs);
+        self.b.activation(act, pre, &name(io.out));
+        Ok(())
+    }
+
+    /// ONNX pads (top, left, bottom, right) giving TFLite's output size.
+    fn pads(&self, w: &Window, xs: [usize; 4], os: [usize; 4]) -> R<[usize; 4]> {
+        let (_, pt) = same::axis(xs[1], w.kernel.0, w.stride.0, w.dilation.0, w.padding)?;
+        let (_, pl) = same::axis(xs[2], w.kernel.1, w.stride.1, w.dilation.1, w.padding)?;
+        let pb = pad_after(
+            os[1],
+            w.stride.0,
+            w.kernel.0,
+            w.dilation.0,
+            xs[1].saturating_add(pt),
+        )?;
+        let pr = pad_after(
+            os[2],
+            w.stride.1,
+            w.kernel.1,
+            w.dilation.1,
+            xs[2].saturating_add(pl),
+        )?;
+        Ok([pt, pl, pb, pr])
+    }
+
+    fn max_pool(&mut self, io: &Io, win: Window, act: Activation) -> R<()> {
+        let xi = io.input(0)?;
+        let xs = self.shape4(io, xi, "input")?;
+        let os = self.shape4(io, io.out, "output")?;
+        let pads = self.pads(&win, xs, os)?;
+        let pre = io.pre.clone();
+        let attrs = Builder::window_attrs(win.kernel, win.stride, None, pads);
+        self.b.node("MaxPool", &[&name(xi)], &pre, attrs);
+        self.b.activation(act, &pre, &name(io.out));
+        Ok(())
+    }
+
+    /// Add or Mul; a constant operand becomes an initialiser.
+    fn binary(&mut self, io: &Io, op: &str, act: Activation) -> R<()> {
+        let other = io.input(1)?;
+        let y = name(other);
+        if let Some(v) = &self.konst[other] {
+            let s = &self.t[other].shape;
+            if s.len() == 4 {
+                return Err(format!("operator {}: 4-D constant operand", io.k));
+            }
+            // A per-channel vector broadcasts over NCHW as [C, 1, 1].
+            let dims: Vec<usize> = if s.len() == 1 && self.t[io.out].shape.len() == 4 {
+                vec![s[0], 1, 1]
+            } else {
+                s.clone()
+            };
+            let init = f32_tensor(&y, &dims, v);
+            self.b.init(init);
+        }
+        let pre = io.pre.clone();
+        self.b.node(op, &[&name(io.input(0)?), &y], &pre, vec![]);
+        self.b.activation(act, &pre, &name(io.out));
+        Ok(())
+    }
+
+    fn pad(&mut self, io: &Io) -> R<()> {
+        let p = self.t[io.input(1)?]
+            .i32s()
+            .ok_or(format!("operator {}: paddings", io.k))?;
+        let r = self.t[io.input(0)?].shape.len();
+        let mut pads = vec![0i64; 2 * r];
+        for d in 0..r {
+            let to = nchw_axis(d, r);
+            pads[to] = p.get(2 * d).copied().unwrap_or(0) as i64;
+            pads[r + to] = p.get(2 * d + 1).copied().unwrap_or(0) as i64;
+        }
+        let pn = self.b.fresh("pads");
+        self.b.init(i64_tensor(&pn, &pads));
+        self.b
+            .node("Pad", &[&name(io.input(0)?), &pn], &name(io.out), vec![]);
+        Ok(())
+    }
+
+    /// TFLite reshapes in NHWC order, so 4-D tensors go back to NHWC around it.
+    fn reshape(&mut self, io: &Io) -> R<()> {
+        let (xi, o) = (io.input(0)?, name(io.out));
+        let src = if self.t[xi].shape.len() == 4 {
+            let n = self.b.fresh("nhwc");
+            let perm = vec![("perm", Attr::Ints(vec![0, 2, 3, 1]))];
+            self.b.node("Transpose", &[&name(xi)], &n, perm);
+            n
+        } else {
+            name(xi)
+        };
+        let s = &self.t[io.out].shape;
+        let sn = self.b.fresh("shape");
+        let dims: Vec<i64> = s.iter().map(|&d| d as i64).collect();
+        self.b.init(i64_tensor(&sn, &dims));
+        if s.len() == 4 {
+            let pre = io.pre.clone();
+            self.b.node("Reshape", &[&src, &sn], &pre, vec![]);
+            let perm = vec![("perm", Attr::Ints(vec![0, 3, 1, 2]))];
+            self.b.node("Transpose", &[&pre], &o, perm);
+        } else {
+            self.b.node("Reshape", &[&src, &sn], &o, vec![]);
+        }
+        Ok(())
+    }
+
+    fn concat(&mut self, io: &Io, axis: i32, act: Activation) -> R<()> {
+        let r = self.t[io.out].shape.len();
+        let a = if axis < 0 {
+            axis as i64 + r as i64
+        } else {
+            axis as i64
+        };
+        if a < 0 || a >= r as i64 {
+            return Err(format!("operator {}: axis {axis} of a {r}-D output", io.k));
+        }
+        let names: Vec<String> = io.ins.iter().map(|&i| name(i)).collect();
+        let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+        let pre = io.pre.clone();
+        let axis = nchw_axis(a as usize, r) as i64;
+        self.b
+            .node("Concat", &refs, &pre, vec![("axis", Attr::Int(axis))]);
+        self.b.activation(act, &pre, &name(io.out));
+        Ok(())
+    }
+
+    fn resize(&mut self, io: &Io, align_corners: bool, half_pixel: bool) -> R<()> {
+        let os = self.shape4(io, io.out, "output")?;
+        let sn = self.b.fresh("sizes");
+        let sizes = [os[0], os[3], os[1], os[2]].map(|d| d as i64);
+        self.b.init(i64_tensor(&sn, &sizes));
+        let mode = match (align_corners, half_pixel) {
+            (true, _) => "align_corners",
+            (false, true) => "half_pixel",
+            (false, false) => "asymmetric",
+        };
+        let attrs = vec![
+            ("mode", Attr::Str("linear")),
+            ("coordinate_transformation_mode", Attr::Str(mode)),
+        ];
+        let x = name(io.input(0)?);
+        self.b
+            .node("Resize", &[&x, "", "", &sn], &name(io.out), attrs);
+        Ok(())
+    }
+
+    /// Graph outputs, 4-D ones transposed back to NHWC.
+    fn outputs(&mut self, graph: &Graph) {
+        for (j, &out) in graph.outputs.iter().enumerate() {
+            let s = &self.t[out].shape;
+            let on = format!("output{j}");
+            let perm = if s.len() == 4 {
+                vec![0, 2, 3, 1]
+            } else {
+                (0..s.len() as i64).collect()
+            };
+            let perm = vec![("perm", Attr::Ints(perm))];
+            self.b.node("Transpose", &[&name(out)], &on, perm);
+            self.b.graph.msg(12, value_info(&on, s));
+        }
+    }
+
+    /// The `ModelProto` around the graph.
+    fn model(mut self) -> Vec<u8> {
+        let mut model = Pb::default();
+        model.int(1, 7).str(2, "gait");
+        let mut opset = Pb::default();
+        opset.str(1, "").int(2, 13);
+        model.msg(8, opset);
+        model.msg(7, std::mem::take(&mut self.b.graph));
+        model.0
+    }
 }
 
-/// The ONNX model bytes of `graph`.
+impl Window {
+    fn of(stride: (usize, usize), dilation: (usize, usize), padding: Padding) -> Self {
+        Window {
+            kernel: (1, 1),
+            stride,
+            dilation,
+            padding,
+        }
+    }
+}
+
+/// TFLite OHWI weights (depthwise 1HWC) as ONNX OIHW (depthwise C1HW).
+fn oihw(w: &[f32], [wo, kh, kw, wi]: [usize; 4], depthwise: bool) -> Vec<f32> {
+    let mut out = vec![0f32; w.len()];
+    let ic = if depthwise { 1 } else { wi };
+    let mut src = w.iter();
+    for a in 0..wo {
+        for y in 0..kh {
+            for x in 0..kw {
+                for c in 0..wi {
+                    let (o, i) = if depthwise { (c, 0) } else { (a, c) };
+                    out[((o * ic + i) * kh + y) * kw + x] = *src.next().unwrap_or(&0.0);
+                }
+            }
+        }
+    }
+    out
+}
+
 /// Padding after the input so that `out` outputs fit: a hostile graph may declare
 /// empty or huge sizes, so the arithmetic is checked (found by the `tflite_graph` fuzz target).
-fn pad_after(
-    out: usize,
-    stride: usize,
-    k: usize,
-    dilation: usize,
-    padded_in: usize,
-) -> Result<usize, String> {
+fn pad_after(out: usize, stride: usize, k: usize, dilation: usize, padded_in: usize) -> R<usize> {
     let span = out
         .checked_sub(1)
         .and_then(|o| o.checked_mul(stride))
@@ -170,282 +443,4 @@ fn pad_after(
             )
         })?;
     Ok(span.saturating_sub(padded_in))
-}
-
-pub fn to_onnx(graph: &Graph) -> Result<Vec<u8>, String> {
-    let mut b = Builder {
-        graph: Pb::default(),
-        count: 0,
-    };
-    b.graph.str(2, "tflite");
-    let t = &graph.tensors;
-    let name = |i: usize| format!("t{i}");
-    let mut konst: Vec<Option<Vec<f32>>> = t.iter().map(|t| t.f32s()).collect();
-    let input = *graph.inputs.first().ok_or("graph has no input")?;
-    b.graph.msg(11, value_info("input", &t[input].shape));
-    b.node(
-        "Transpose",
-        &["input"],
-        &name(input),
-        vec![("perm", Attr::Ints(vec![0, 3, 1, 2]))],
-    );
-    for (k, op) in graph.operators.iter().enumerate() {
-        let ins: Vec<usize> = op
-            .inputs
-            .iter()
-            .filter(|&&i| i >= 0)
-            .map(|&i| i as usize)
-            .collect();
-        let out = *op
-            .outputs
-            .first()
-            .ok_or(format!("operator {k} has no output"))? as usize;
-        let get = |j: usize| {
-            ins.get(j)
-                .copied()
-                .ok_or(format!("operator {k}: missing input {j}"))
-        };
-        let cst = |i: usize| {
-            konst[i]
-                .clone()
-                .ok_or(format!("operator {k}: input {i} not constant"))
-        };
-        let pre = b.fresh("pre");
-        let (o, x) = (name(out), name(get(0)?));
-        match (&op.op, &op.options) {
-            (Op::Dequantize | Op::Densify, _) => {
-                konst[out] = Some(cst(get(0)?)?);
-                continue;
-            }
-            (Op::Conv2d | Op::DepthwiseConv2d, opts) => {
-                let (padding, stride, dilation, act, depthwise) = match opts {
-                    OpOptions::Conv {
-                        padding,
-                        stride,
-                        dilation,
-                        activation,
-                    } => (*padding, *stride, *dilation, *activation, false),
-                    OpOptions::Depthwise {
-                        padding,
-                        stride,
-                        dilation,
-                        activation,
-                        ..
-                    } => (*padding, *stride, *dilation, *activation, true),
-                    _ => return Err(format!("operator {k}: conv options")),
-                };
-                let (xs, ws, os) = (&t[get(0)?].shape, &t[get(1)?].shape, &t[out].shape);
-                let [wo, kh, kw, wi] = ws[..] else {
-                    return Err(format!("operator {k}: weights {ws:?}"));
-                };
-                let w = cst(get(1)?)?;
-                // TFLite OHWI (depthwise 1HWC) -> ONNX OIHW (depthwise C1HW).
-                let (oc, ic) = if depthwise { (wi, 1) } else { (wo, wi) };
-                let mut wt = vec![0f32; w.len()];
-                for (j, v) in w.iter().enumerate() {
-                    let (a, y, xx, c) = (
-                        j / (kh * kw * wi),
-                        (j / (kw * wi)) % kh,
-                        (j / wi) % kw,
-                        j % wi,
-                    );
-                    let (oo, ii) = if depthwise { (c, 0) } else { (a, c) };
-                    wt[((oo * ic + ii) * kh + y) * kw + xx] = *v;
-                }
-                let (wn, bn) = (b.fresh("w"), b.fresh("b"));
-                b.init(f32_tensor(&wn, &[oc, ic, kh, kw], &wt));
-                let bias = match ins.get(2) {
-                    Some(&bi) => cst(bi)?,
-                    None => vec![0.0; oc],
-                };
-                b.init(f32_tensor(&bn, &[oc], &bias));
-                let (_, pt) = same::axis(xs[1], kh, stride.0, dilation.0, padding);
-                let (_, pl) = same::axis(xs[2], kw, stride.1, dilation.1, padding);
-                let pb = pad_after(os[1], stride.0, kh, dilation.0, xs[1] + pt)?;
-                let pr = pad_after(os[2], stride.1, kw, dilation.1, xs[2] + pl)?;
-                let mut attrs = vec![
-                    ("kernel_shape", Attr::Ints(vec![kh as i64, kw as i64])),
-                    (
-                        "strides",
-                        Attr::Ints(vec![stride.0 as i64, stride.1 as i64]),
-                    ),
-                    (
-                        "dilations",
-                        Attr::Ints(vec![dilation.0 as i64, dilation.1 as i64]),
-                    ),
-                    (
-                        "pads",
-                        Attr::Ints(vec![pt as i64, pl as i64, pb as i64, pr as i64]),
-                    ),
-                ];
-                if depthwise {
-                    attrs.push(("group", Attr::Int(xs[3] as i64)));
-                }
-                b.node("Conv", &[&x, &wn, &bn], &pre, attrs);
-                b.activation(act, &pre, &o)?;
-            }
-            (Op::Add | Op::Mul, OpOptions::Add { activation }) => {
-                let onnx_op = if op.op == Op::Add { "Add" } else { "Mul" };
-                let other = get(1)?;
-                let y = name(other);
-                if let Some(v) = konst[other].clone() {
-                    let s = &t[other].shape;
-                    if s.len() == 4 {
-                        return Err(format!("operator {k}: 4-D constant operand"));
-                    }
-                    // A per-channel vector broadcasts over NCHW as [C, 1, 1].
-                    let dims: Vec<usize> = if s.len() == 1 && t[out].shape.len() == 4 {
-                        vec![s[0], 1, 1]
-                    } else {
-                        s.clone()
-                    };
-                    b.init(f32_tensor(&y, &dims, &v));
-                }
-                b.node(onnx_op, &[&x, &y], &pre, vec![]);
-                b.activation(*activation, &pre, &o)?;
-            }
-            (Op::Pad, _) => {
-                let p = t[get(1)?].i32s().ok_or(format!("operator {k}: paddings"))?;
-                let r = t[get(0)?].shape.len();
-                let mut pads = vec![0i64; 2 * r];
-                for d in 0..r {
-                    let to = nchw_axis(d, r);
-                    pads[to] = p.get(2 * d).copied().unwrap_or(0) as i64;
-                    pads[r + to] = p.get(2 * d + 1).copied().unwrap_or(0) as i64;
-                }
-                let pn = b.fresh("pads");
-                b.init(i64_tensor(&pn, &pads));
-                b.node("Pad", &[&x, &pn], &o, vec![]);
-            }
-            (Op::Reshape, _) => {
-                let src = if t[get(0)?].shape.len() == 4 {
-                    let n = b.fresh("nhwc");
-                    b.node(
-                        "Transpose",
-                        &[&x],
-                        &n,
-                        vec![("perm", Attr::Ints(vec![0, 2, 3, 1]))],
-                    );
-                    n
-                } else {
-                    x.clone()
-                };
-                let s = &t[out].shape;
-                let sn = b.fresh("shape");
-                b.init(i64_tensor(
-                    &sn,
-                    &s.iter().map(|&d| d as i64).collect::<Vec<_>>(),
-                ));
-                if s.len() == 4 {
-                    b.node("Reshape", &[&src, &sn], &pre, vec![]);
-                    b.node(
-                        "Transpose",
-                        &[&pre],
-                        &o,
-                        vec![("perm", Attr::Ints(vec![0, 3, 1, 2]))],
-                    );
-                } else {
-                    b.node("Reshape", &[&src, &sn], &o, vec![]);
-                }
-            }
-            (Op::Concatenation, OpOptions::Concat { axis, activation }) => {
-                let r = t[out].shape.len() as i32;
-                let a = if *axis < 0 { axis + r } else { *axis } as usize;
-                let a = nchw_axis(a, r as usize);
-                let names: Vec<String> = ins.iter().map(|&i| name(i)).collect();
-                let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-                b.node("Concat", &refs, &pre, vec![("axis", Attr::Int(a as i64))]);
-                b.activation(*activation, &pre, &o)?;
-            }
-            (
-                Op::MaxPool2d,
-                OpOptions::Pool {
-                    padding,
-                    stride,
-                    filter,
-                    activation,
-                },
-            ) => {
-                let (xs, os) = (&t[get(0)?].shape, &t[out].shape);
-                let (_, pt) = same::axis(xs[1], filter.0, stride.0, 1, *padding);
-                let (_, pl) = same::axis(xs[2], filter.1, stride.1, 1, *padding);
-                let pb = ((os[1] - 1) * stride.0 + filter.0).saturating_sub(xs[1] + pt);
-                let pr = ((os[2] - 1) * stride.1 + filter.1).saturating_sub(xs[2] + pl);
-                let attrs = vec![
-                    (
-                        "kernel_shape",
-                        Attr::Ints(vec![filter.0 as i64, filter.1 as i64]),
-                    ),
-                    (
-                        "strides",
-                        Attr::Ints(vec![stride.0 as i64, stride.1 as i64]),
-                    ),
-                    (
-                        "pads",
-                        Attr::Ints(vec![pt as i64, pl as i64, pb as i64, pr as i64]),
-                    ),
-                ];
-                b.node("MaxPool", &[&x], &pre, attrs);
-                b.activation(*activation, &pre, &o)?;
-            }
-            (
-                Op::ResizeBilinear,
-                OpOptions::Resize {
-                    align_corners,
-                    half_pixel_centers,
-                },
-            ) => {
-                let os = &t[out].shape;
-                let sn = b.fresh("sizes");
-                b.init(i64_tensor(
-                    &sn,
-                    &[os[0] as i64, os[3] as i64, os[1] as i64, os[2] as i64],
-                ));
-                let mode = match (align_corners, half_pixel_centers) {
-                    (true, _) => "align_corners",
-                    (false, true) => "half_pixel",
-                    (false, false) => "asymmetric",
-                };
-                let attrs = vec![
-                    ("mode", Attr::Str("linear")),
-                    ("coordinate_transformation_mode", Attr::Str(mode)),
-                ];
-                b.node("Resize", &[&x, "", "", &sn], &o, attrs);
-            }
-            (Op::DepthToSpace, OpOptions::DepthToSpace { block }) => {
-                let attrs = vec![
-                    ("blocksize", Attr::Int(*block as i64)),
-                    ("mode", Attr::Str("DCR")),
-                ];
-                b.node("DepthToSpace", &[&x], &o, attrs);
-            }
-            (Op::Logistic, _) => b.node("Sigmoid", &[&x], &o, vec![]),
-            (Op::Relu, _) => b.node("Relu", &[&x], &o, vec![]),
-            (Op::Relu6, _) => b.activation(Activation::Relu6, &x, &o)?,
-            (other, _) => return Err(format!("operator {k}: {other:?} cannot be exported")),
-        }
-    }
-    for (j, &out) in graph.outputs.iter().enumerate() {
-        let s = &t[out].shape;
-        let on = format!("output{j}");
-        let perm = if s.len() == 4 {
-            vec![0, 2, 3, 1]
-        } else {
-            (0..s.len() as i64).collect()
-        };
-        b.node(
-            "Transpose",
-            &[&name(out)],
-            &on,
-            vec![("perm", Attr::Ints(perm))],
-        );
-        b.graph.msg(12, value_info(&on, s));
-    }
-    let mut model = Pb::default();
-    model.int(1, 7).str(2, "gait");
-    let mut opset = Pb::default();
-    opset.str(1, "").int(2, 13);
-    model.msg(8, opset);
-    model.msg(7, std::mem::take(&mut b.graph));
-    Ok(model.0)
 }
