@@ -94,16 +94,22 @@ impl State<'_> {
         let bad = |m: &str| TfliteError::Malformed(format!("sparse tensor: {m}"));
         let n = self.shape.len();
         if level == self.sp.traversal_order.len() {
-            let mut orig: Vec<usize> = self.idx[..n].to_vec();
-            for (j, &d) in self.sp.block_map.iter().enumerate() {
-                orig[d] = orig[d] * self.block_size[j] + self.idx[n + j];
-            }
+            // Called once per stored value: no allocation here.
             let mut lin = 0usize;
-            for (i, &o) in orig.iter().enumerate() {
-                if o >= self.shape[i] {
-                    return Err(bad("index outside the dense shape"));
+            for i in 0..n {
+                let mut o = Some(self.idx[i]);
+                for (j, &d) in self.sp.block_map.iter().enumerate() {
+                    if d == i {
+                        o = o.and_then(|o| {
+                            o.checked_mul(self.block_size[j])?
+                                .checked_add(self.idx[n + j])
+                        });
+                    }
                 }
-                lin = lin * self.shape[i] + o;
+                match o {
+                    Some(o) if o < self.shape[i] => lin = lin * self.shape[i] + o,
+                    _ => return Err(bad("index outside the dense shape")),
+                }
             }
             let src = self
                 .values

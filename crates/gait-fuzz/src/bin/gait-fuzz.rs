@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use std::process::{Command, ExitCode, Stdio};
 
 use gait_fuzz::engine::{self, Budget};
-use gait_fuzz::targets::{TARGETS, Target, target};
+use gait_fuzz::targets::{Scratch, TARGETS, Target, target};
 
 /// The largest single allocation a parser may ask for. Every real input of gait needs far less
 /// (a 4K frame is 25 MB, SD 1.5's largest tensor 100 MB); a request beyond this comes from a
@@ -117,8 +117,14 @@ fn hex(bytes: &[u8]) -> String {
 /// One target in a child process; restarted after an abort until the budget is spent.
 fn run_target(t: &Target, o: &Options) -> (u64, f64, Vec<(PathBuf, String)>) {
     let exe = std::env::current_exe().expect("the running executable");
-    let current = o.crashes.join(format!(".current-{}", t.name));
     let _ = std::fs::create_dir_all(&o.crashes);
+    // The child writes every input here before running it: on tmpfs where there is one, so
+    // that large seeds (a 3 MB model) cost a memory copy rather than a disk write per input.
+    let scratch = Scratch::new().ok();
+    let current = match &scratch {
+        Some(s) => s.path().join(format!(".current-{}", t.name)),
+        None => o.crashes.join(format!(".current-{}", t.name)),
+    };
     let (mut inputs, mut seconds, mut crashes) = (0u64, 0f64, Vec::new());
     let mut seed = o.seed;
     while inputs < o.budget.inputs && seconds < o.budget.seconds {
