@@ -41,6 +41,13 @@ impl ClipTextModel {
         };
         let e = vb.pp("embeddings");
         let h = cfg.hidden_size;
+        // The weights' shapes do not show the head count: a config must split `h` evenly.
+        if cfg.num_attention_heads == 0 || !h.is_multiple_of(cfg.num_attention_heads) {
+            candle_core::bail!(
+                "text encoder config: {} attention heads do not divide hidden size {h}",
+                cfg.num_attention_heads
+            );
+        }
         let token = embedding(cfg.vocab_size, h, e.pp("token_embedding"))?;
         let position = embedding(cfg.max_position_embeddings, h, e.pp("position_embedding"))?;
         let eps = cfg.layer_norm_eps;

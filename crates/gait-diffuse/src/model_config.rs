@@ -126,7 +126,12 @@ impl VaeConfig {
 
     /// Pixels per latent cell along each axis.
     pub fn scale_factor(&self) -> usize {
-        1 << self.block_out_channels.len().saturating_sub(1)
+        // Configs from files are checked; a hand-built one must not shift past the word.
+        1 << self
+            .block_out_channels
+            .len()
+            .saturating_sub(1)
+            .min(MAX_BLOCKS)
     }
 }
 
@@ -159,19 +164,106 @@ impl Default for TextConfig {
     }
 }
 
+/// The most layers per block (or encoder layers) a config may declare; SD 1.5 has 2 per
+/// block and 12 text-encoder layers. Buffers and loops are sized from these before any weight
+/// is read, so a hostile file must not name 10^12 of them.
+pub const MAX_LAYERS: usize = 64;
+/// The most resolution blocks a config may declare (SD 1.5: 4).
+pub const MAX_BLOCKS: usize = 16;
+
+/// The sizes a config must keep to before a model is built from it.
+pub trait Check {
+    fn check(&self) -> Result<(), String>;
+}
+
+fn within(what: &str, n: usize, max: usize) -> Result<(), String> {
+    match n <= max {
+        true => Ok(()),
+        false => Err(format!("{what} is {n}, over the limit of {max}")),
+    }
+}
+
+fn groups(n: usize) -> Result<(), String> {
+    match n {
+        0 => Err("norm_num_groups is 0".into()),
+        _ => Ok(()),
+    }
+}
+
+impl Check for UnetConfig {
+    fn check(&self) -> Result<(), String> {
+        within("layers_per_block", self.layers_per_block, MAX_LAYERS)?;
+        within(
+            "transformer_layers_per_block",
+            self.transformer_layers_per_block,
+            MAX_LAYERS,
+        )?;
+        within(
+            "block_out_channels' length",
+            self.block_out_channels.len(),
+            MAX_BLOCKS,
+        )?;
+        within(
+            "conditioning_embedding_out_channels' length",
+            self.conditioning_embedding_out_channels.len(),
+            MAX_BLOCKS,
+        )?;
+        // Padding of a 3x3 convolution: more than the kernel overflows candle's size arithmetic.
+        within("downsample_padding", self.downsample_padding, 3)?;
+        groups(self.norm_num_groups)
+    }
+}
+
+impl Check for VaeConfig {
+    fn check(&self) -> Result<(), String> {
+        within("layers_per_block", self.layers_per_block, MAX_LAYERS)?;
+        within(
+            "block_out_channels' length",
+            self.block_out_channels.len(),
+            MAX_BLOCKS,
+        )?;
+        groups(self.norm_num_groups)
+    }
+}
+
+impl Check for TextConfig {
+    fn check(&self) -> Result<(), String> {
+        within("num_hidden_layers", self.num_hidden_layers, MAX_LAYERS)
+    }
+}
+
 /// Reads `config.json` in `dir`, or the SD 1.5 defaults when there is none.
-pub fn read_config<T: for<'de> Deserialize<'de> + Default>(dir: &Path) -> Result<T, DiffuseError> {
+pub fn read_config<T: for<'de> Deserialize<'de> + Default + Check>(
+    dir: &Path,
+) -> Result<T, DiffuseError> {
     let path = dir.join("config.json");
     if !path.exists() {
         return Ok(T::default());
     }
     let text = std::fs::read_to_string(&path).map_err(|e| DiffuseError::bad_model(&path, e))?;
-    serde_json::from_str(&text).map_err(|e| DiffuseError::bad_model(&path, e))
+    let config: T = serde_json::from_str(&text).map_err(|e| DiffuseError::bad_model(&path, e))?;
+    config
+        .check()
+        .map_err(|e| DiffuseError::bad_model(&path, e))?;
+    Ok(config)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hostile_sizes_are_refused_when_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |json: &str| std::fs::write(dir.path().join("config.json"), json).unwrap();
+        write(r#"{"layers_per_block": 1000000000000}"#);
+        let e = read_config::<UnetConfig>(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("layers_per_block is 1000000000000"), "{e}");
+        write(r#"{"norm_num_groups": 0}"#);
+        assert!(read_config::<VaeConfig>(dir.path()).is_err());
+        write(r#"{"num_hidden_layers": 12}"#);
+        assert!(read_config::<TextConfig>(dir.path()).is_ok());
+    }
 
     #[test]
     fn sd15_defaults_give_the_v1_5_layout() {

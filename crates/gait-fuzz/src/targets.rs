@@ -150,6 +150,71 @@ fn clip_merges(_: &Scratch, b: &[u8]) {
     }
 }
 
+/// The tiny SD 1.5 + ControlNet fixture's folders, each with its `config.json`.
+const TINY: &str = "crates/gait-diffuse/tests/fixtures/tiny";
+const MODEL_SLOTS: [&str; 4] = ["unet", "controlnet", "vae", "text_encoder"];
+
+/// Which model a `config.json` is for, by the class it names (the UNet's when none).
+fn config_slot(b: &[u8]) -> usize {
+    let has = |k: &[u8]| b.windows(k.len()).any(|w| w == k);
+    [
+        b"ControlNetModel".as_slice(),
+        b"AutoencoderKL",
+        b"clip_text_model",
+    ]
+    .iter()
+    .position(|k| has(k))
+    .map_or(0, |i| i + 1)
+}
+
+/// A diffusers `config.json`: it replaces the tiny model's config of the kind it names, the
+/// four models are built from the configs and the real tiny weights, and a model that loads
+/// runs one denoising step (a config can pass the weights' shape checks with hostile values).
+fn diffusers_config(s: &Scratch, b: &[u8]) {
+    use candle_core::{DType, Device, Tensor};
+    let dir = s.path().join("sd");
+    let tiny = crate::repo().join(TINY);
+    let slot = config_slot(b);
+    for (i, name) in MODEL_SLOTS.iter().enumerate() {
+        let (from, to) = (tiny.join(name), dir.join(name));
+        if !to.is_dir() {
+            let _ = std::fs::create_dir_all(&to);
+            for f in std::fs::read_dir(&from).into_iter().flatten().flatten() {
+                let _ = std::os::unix::fs::symlink(f.path(), to.join(f.file_name()));
+            }
+            let _ = std::os::unix::fs::symlink(tiny.join("tokenizer"), dir.join("tokenizer"));
+        }
+        let config = to.join("config.json");
+        let _ = std::fs::remove_file(&config);
+        let _ = match i == slot {
+            true => std::fs::write(&config, b),
+            false => std::fs::copy(from.join("config.json"), &config).map(|_| ()),
+        };
+    }
+    let cpu = Device::Cpu;
+    let Ok(pipe) =
+        gait_diffuse::ControlnetPipeline::load(&dir, &dir.join("controlnet"), DType::F32, &cpu)
+    else {
+        return;
+    };
+    let scale = pipe.vae_scale();
+    let (Ok(context), Ok(latents), Ok(control)) = (
+        pipe.context("a person walking", "", 2.0),
+        Tensor::zeros((1, 4, 2, 2), DType::F32, &cpu),
+        Tensor::zeros((1, 3, 2 * scale, 2 * scale), DType::F32, &cpu),
+    ) else {
+        return;
+    };
+    let p = gait_diffuse::DenoiseParams {
+        steps: 1,
+        guidance_scale: 2.0,
+        conditioning_scale: 1.0,
+        scheduler: gait_diffuse::SchedulerKind::Ddim,
+        cutoffs: Default::default(),
+    };
+    let _ = pipe.generate(&context, &control, &latents, &p);
+}
+
 fn image(s: &Scratch, b: &[u8]) {
     let p = s.file("frame.png", b);
     if let Ok(info) = gait_pipeline::input::InputInfo::open(&p)
@@ -263,6 +328,17 @@ pub const TARGETS: &[Target] = &[
         seeds: &["fuzz/seeds/clip_merges"],
         ext: "txt",
         run: clip_merges,
+    },
+    Target {
+        name: "diffusers_config",
+        seeds: &[
+            "crates/gait-diffuse/tests/fixtures/tiny/unet/config.json",
+            "crates/gait-diffuse/tests/fixtures/tiny/controlnet/config.json",
+            "crates/gait-diffuse/tests/fixtures/tiny/vae/config.json",
+            "crates/gait-diffuse/tests/fixtures/tiny/text_encoder/config.json",
+        ],
+        ext: "json",
+        run: diffusers_config,
     },
     Target {
         name: "image",
