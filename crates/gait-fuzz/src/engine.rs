@@ -90,11 +90,19 @@ pub fn seeds(t: &Target) -> Vec<(PathBuf, Vec<u8>)> {
     files.extend(regressions(t));
     files
         .into_iter()
-        .filter_map(|f| std::fs::read(&f).ok().map(|b| (f, b)))
+        .filter_map(|f| read_input(&f).ok().map(|b| (f, b)))
         .collect()
 }
 
-/// Inputs that once crashed `t`, kept as regression cases.
+/// A seed or saved input: the file's bytes, or the input a `.patch` file describes.
+pub fn read_input(path: &Path) -> Result<Vec<u8>, String> {
+    match path.extension().is_some_and(|e| e == "patch") {
+        true => crate::patch::read(path),
+        false => std::fs::read(path).map_err(|e| format!("{}: {e}", path.display())),
+    }
+}
+
+/// Inputs that once crashed `t`, kept as regression cases (`.bin`, or `.patch` of a seed).
 pub fn regressions(t: &Target) -> Vec<PathBuf> {
     let dir = crate::repo().join("fuzz/regressions").join(t.name);
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -102,7 +110,7 @@ pub fn regressions(t: &Target) -> Vec<PathBuf> {
         .flatten()
         .flatten()
         .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|e| e == "bin"))
+        .filter(|p| p.extension().is_some_and(|e| e == "bin" || e == "patch"))
         .collect();
     v.sort();
     v

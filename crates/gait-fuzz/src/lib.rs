@@ -2,7 +2,7 @@
 //! makes inputs from real seed files, [`engine`] runs a target over them and keeps any input
 //! that panics, aborts, allocates beyond the limit or hangs. The `gait-fuzz` binary runs the
 //! targets in child processes for a time or input budget (CI and long runs); the crate's tests
-//! replay the seeds and every saved crash (`fuzz/regressions/`).
+//! replay the seeds and every saved crash (`fuzz/regressions/`, whole or as a [`patch`] of a seed).
 //!
 //! Why this engine and not libFuzzer or AFL++: both need instrumented builds that the stable
 //! toolchain of this project's machines cannot make without nightly flags, and CI must build
@@ -12,6 +12,7 @@
 
 pub mod engine;
 pub mod mutate;
+pub mod patch;
 pub mod targets;
 
 use std::path::PathBuf;

@@ -9,6 +9,11 @@ use gait_fuzz::targets::{Scratch, TARGETS};
 fn every_target_has_seeds_and_survives_them_and_its_regressions() {
     let scratch = Scratch::new().unwrap();
     for t in TARGETS {
+        for p in engine::regressions(t) {
+            if let Err(e) = engine::read_input(&p) {
+                panic!("{}: regression case unreadable: {e}", t.name);
+            }
+        }
         let seeds = engine::seeds(t);
         assert!(!seeds.is_empty(), "{}: no seed files", t.name);
         for (path, bytes) in &seeds {

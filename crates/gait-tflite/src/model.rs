@@ -44,6 +44,16 @@ pub struct Tensor {
 }
 
 impl Tensor {
+    /// Whether `n` values fill this tensor's shape: an operator that passes a constant on
+    /// (dequantize, densify) must not hand a weight of one size to a layer expecting another.
+    pub fn holds(&self, n: usize) -> Result<(), String> {
+        let want = self.shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+        match want == Some(n) {
+            true => Ok(()),
+            false => Err(format!("tensor {}: {n} values for shape {:?}", self.name, self.shape)),
+        }
+    }
+
     /// Constant values as f32 (from float32 or float16).
     pub fn f32s(&self) -> Option<Vec<f32>> {
         let d = self.data.as_ref()?;

@@ -120,7 +120,9 @@ impl Exporter<'_> {
         let k = io.k;
         match (&op.op, &op.options) {
             (Op::Dequantize | Op::Densify, _) => {
-                self.konst[io.out] = Some(self.constant(io, io.input(0)?)?.to_vec());
+                let v = self.constant(io, io.input(0)?)?.to_vec();
+                self.t[io.out].holds(v.len())?;
+                self.konst[io.out] = Some(v);
             }
             (
                 Op::Conv2d,

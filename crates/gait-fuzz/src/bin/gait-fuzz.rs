@@ -4,6 +4,7 @@
 //! ```text
 //! gait-fuzz run [--target NAME]... [--seconds S] [--inputs N] [--seed N] [--crashes DIR]
 //! gait-fuzz replay --target NAME FILE...
+//! gait-fuzz patch SEED INPUT
 //! gait-fuzz list
 //! ```
 //! `run` prints a table (inputs tried, inputs per second, crashes per target) and exits 1 when
@@ -69,7 +70,7 @@ struct Options {
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: gait-fuzz run [--target NAME]... [--seconds S] [--inputs N] [--seed N] [--crashes DIR]\n       gait-fuzz replay --target NAME FILE...\n       gait-fuzz list"
+        "usage: gait-fuzz run [--target NAME]... [--seconds S] [--inputs N] [--seed N] [--crashes DIR]\n       gait-fuzz replay --target NAME FILE...\n       gait-fuzz patch SEED INPUT\n       gait-fuzz list"
     );
     ExitCode::from(2)
 }
@@ -182,6 +183,27 @@ fn run_target(t: &Target, o: &Options) -> (u64, f64, Vec<(PathBuf, String)>) {
     (inputs, seconds, crashes)
 }
 
+/// Prints the `.patch` text of `input` against `seed` (a path from the repository root).
+fn patch(seed: &str, input: &str) -> ExitCode {
+    let (Ok(s), Ok(i)) = (
+        std::fs::read(gait_fuzz::repo().join(seed)),
+        std::fs::read(input),
+    ) else {
+        eprintln!("gait-fuzz: cannot read {seed} (from the repository root) or {input}");
+        return ExitCode::from(2);
+    };
+    match gait_fuzz::patch::write(seed, &s, &i) {
+        Some(text) => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
+        None => {
+            eprintln!("gait-fuzz: {input} differs from {seed} in too many bytes; keep it whole");
+            ExitCode::FAILURE
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(cmd) = args.first() else {
@@ -218,6 +240,10 @@ fn main() -> ExitCode {
             println!("stats {} {}", stats.inputs, stats.seconds);
             ExitCode::SUCCESS
         }
+        "patch" => match (args.get(1), args.get(2)) {
+            (Some(seed), Some(input)) => patch(seed, input),
+            _ => usage(),
+        },
         "replay" => {
             let (o, files) = match parse(&args[1..]) {
                 Ok(x) => x,

@@ -22,7 +22,9 @@ pub(super) fn nodes(graph: &Graph) -> R<(Vec<Node>, Vec<Option<Vec<f32>>>)> {
     for (k, op) in graph.operators.iter().enumerate() {
         let io = Io::new(k, op)?;
         if matches!(op.op, Op::Dequantize | Op::Densify) {
-            c.values[io.out] = Some(c.constant(&io, io.input(0)?)?);
+            let v = c.constant(&io, io.input(0)?)?;
+            graph.tensors[io.out].holds(v.len())?;
+            c.values[io.out] = Some(v);
             continue;
         }
         let (step, act) = c.step(&io, op)?;
