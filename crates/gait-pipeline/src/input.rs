@@ -3,12 +3,13 @@
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 
 use gait_core::Frame;
 use sha2::{Digest, Sha256};
 
 use crate::PipelineError;
+use crate::video_decoder::VideoDecoder;
 
 const VIDEO_EXTENSIONS: [&str; 6] = ["mp4", "avi", "mov", "webm", "mkv", "m4v"];
 const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "bmp", "tif"];
@@ -130,18 +131,7 @@ impl InputInfo {
     pub fn frames(&self) -> Result<FrameReader, PipelineError> {
         let source = match &self.kind {
             Kind::Images(files) => Source::Images(files.clone()),
-            Kind::Video => {
-                let child = Command::new("ffmpeg")
-                    .args(["-v", "error", "-nostdin", "-i"])
-                    .arg(&self.path)
-                    .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
-                    .stdin(Stdio::null())
-                    .stdout(Stdio::piped())
-                    .stderr(Stdio::piped())
-                    .spawn()
-                    .map_err(|e| ffmpeg_missing(&self.path, e))?;
-                Source::Video(child)
-            }
+            Kind::Video => Source::Video(VideoDecoder::spawn(&self.path)?),
         };
         Ok(FrameReader {
             info: self.clone(),
@@ -179,7 +169,7 @@ fn natural_key(path: &Path) -> (String, u64, String) {
     (prefix, digits.parse().unwrap_or(0), name)
 }
 
-fn ffmpeg_missing(path: &Path, e: std::io::Error) -> PipelineError {
+pub(crate) fn ffmpeg_missing(path: &Path, e: std::io::Error) -> PipelineError {
     PipelineError::input(
         path,
         format!(
@@ -270,7 +260,7 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
 }
 
 enum Source {
-    Video(Child),
+    Video(VideoDecoder),
     Images(Vec<PathBuf>),
 }
 
@@ -307,30 +297,20 @@ impl FrameReader {
                 }
                 img
             }
-            Source::Video(child) => {
-                let len = self.info.width as usize * self.info.height as usize * 3;
-                let mut buf = vec![0u8; len];
-                let stdout = child
-                    .stdout
-                    .as_mut()
-                    .ok_or_else(|| PipelineError::input(&self.info.path, "ffmpeg has no output"))?;
-                let mut filled = 0;
-                while filled < len {
-                    match stdout.read(&mut buf[filled..]) {
-                        Ok(0) => break,
-                        Ok(n) => filled += n,
-                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                        Err(e) => return Err(PipelineError::input(&self.info.path, e)),
+            Source::Video(decoder) => {
+                let mut buf = vec![0u8; self.info.width as usize * self.info.height as usize * 3];
+                match decoder.read_frame(&mut buf)? {
+                    0 => {
+                        decoder.finish(index)?;
+                        return Ok(None);
                     }
-                }
-                if filled == 0 {
-                    return self.finish_video(index);
-                }
-                if filled < len {
-                    return Err(PipelineError::input(
-                        &self.info.path,
-                        format!("frame {index} is truncated; the video is damaged"),
-                    ));
+                    n if n < buf.len() => {
+                        return Err(PipelineError::input(
+                            &self.info.path,
+                            format!("frame {index} is truncated; the video is damaged"),
+                        ));
+                    }
+                    _ => {}
                 }
                 image::RgbImage::from_raw(self.info.width, self.info.height, buf).ok_or_else(
                     || PipelineError::input(&self.info.path, "frame buffer size mismatch"),
@@ -339,48 +319,6 @@ impl FrameReader {
         };
         self.next += 1;
         Ok(Some(Frame::new(index, image)))
-    }
-
-    /// At the end of ffmpeg's output: a clean end, or the decoder's error.
-    fn finish_video(&mut self, index: usize) -> Result<Option<Frame>, PipelineError> {
-        let Source::Video(child) = &mut self.source else {
-            return Ok(None);
-        };
-        let mut err = String::new();
-        if let Some(mut e) = child.stderr.take() {
-            let _ = e.read_to_string(&mut err);
-        }
-        let status = child
-            .wait()
-            .map_err(|e| PipelineError::input(&self.info.path, e))?;
-        if !status.success() || (index == 0 && !err.trim().is_empty()) {
-            let first = err
-                .lines()
-                .find(|l| !l.trim().is_empty())
-                .unwrap_or("ffmpeg failed")
-                .trim()
-                .to_string();
-            return Err(PipelineError::input(
-                &self.info.path,
-                format!("cannot decode the video: {first}"),
-            ));
-        }
-        if index == 0 {
-            return Err(PipelineError::input(
-                &self.info.path,
-                "the video has no frames",
-            ));
-        }
-        Ok(None)
-    }
-}
-
-impl Drop for FrameReader {
-    fn drop(&mut self) {
-        if let Source::Video(child) = &mut self.source {
-            let _ = child.kill();
-            let _ = child.wait();
-        }
     }
 }
 

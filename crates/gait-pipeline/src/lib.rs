@@ -19,6 +19,7 @@ pub mod registry;
 pub mod runner;
 pub mod selection;
 mod subject;
+mod video_decoder;
 
 pub use config::PipelineConfig;
 pub use error::PipelineError;
