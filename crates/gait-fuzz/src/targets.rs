@@ -215,8 +215,19 @@ fn diffusers_config(s: &Scratch, b: &[u8]) {
     let _ = pipe.generate(&context, &control, &latents, &p);
 }
 
+/// The file name a user's image would have, from its first bytes (the decoders are chosen by
+/// extension, so a JPEG named `.png` would never reach the JPEG decoder).
+fn image_name(b: &[u8]) -> &'static str {
+    match b {
+        [0xff, 0xd8, ..] => "frame.jpg",
+        [b'B', b'M', ..] => "frame.bmp",
+        [b'I', b'I', ..] | [b'M', b'M', ..] => "frame.tif",
+        _ => "frame.png",
+    }
+}
+
 fn image(s: &Scratch, b: &[u8]) {
-    let p = s.file("frame.png", b);
+    let p = s.file(image_name(b), b);
     if let Ok(info) = gait_pipeline::input::InputInfo::open(&p)
         && let Ok(mut frames) = info.frames()
     {
@@ -345,7 +356,9 @@ pub const TARGETS: &[Target] = &[
         seeds: &[
             "crates/gait-edge/tests/fixtures/hed/annotator_safe.png",
             "crates/gait-edge/tests/fixtures/hed/annotator.png",
-            "fuzz/seeds/image",
+            "fuzz/seeds/image/sample_frame_96px.jpg",
+            "fuzz/seeds/image/testsrc_32x24.bmp",
+            "fuzz/seeds/image/testsrc_32x24.tif",
         ],
         ext: "png",
         run: image,

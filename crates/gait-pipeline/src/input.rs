@@ -374,6 +374,21 @@ mod tests {
     }
 
     #[test]
+    fn every_accepted_image_extension_decodes() {
+        let dir = tempfile::tempdir().unwrap();
+        let img =
+            image::RgbImage::from_fn(8, 6, |x, y| image::Rgb([x as u8 * 30, y as u8 * 40, 7]));
+        for ext in IMAGE_EXTENSIONS {
+            let p = dir.path().join(format!("frame.{ext}"));
+            img.save(&p).unwrap();
+            let info = InputInfo::open(&p).unwrap();
+            assert_eq!((info.width, info.height), (8, 6), "{ext}");
+            let frame = info.frames().unwrap().next_frame().unwrap().unwrap();
+            assert_eq!(frame.width(), 8, "{ext}");
+        }
+    }
+
+    #[test]
     fn bad_inputs_are_named() {
         let dir = tempfile::tempdir().unwrap();
         let e = InputInfo::open(dir.path()).unwrap_err().to_string();
