@@ -144,6 +144,27 @@ fn pth(s: &Scratch, b: &[u8]) {
     let _ = gait_pose::openpose::net::read_checkpoint(&s.file("model.pth", b));
 }
 
+/// An ONNX graph as the OpenPose ort backend opens it (ONNX Runtime parses it; we check its
+/// inputs and outputs), then run on one 16x16 image whose outputs we check and decode.
+fn onnx(s: &Scratch, b: &[u8]) {
+    use gait_pose::openpose::{NetInput, OpenposeModel, OpenposeNet};
+    let p = s.file("openpose.onnx", b);
+    // COCO-18 exports of the PyTorch body model name their first layer `model0.conv1_1`.
+    let coco = b.windows(14).any(|w| w == b"model0.conv1_1");
+    let model = match coco {
+        true => OpenposeModel::Coco18,
+        false => OpenposeModel::Body25,
+    };
+    if let Ok(mut net) = gait_pose::openpose::net::OrtNet::load(&p, model, gait_core::Device::Cpu) {
+        let input = NetInput {
+            data: vec![0.5; 3 * 16 * 16],
+            height: 16,
+            width: 16,
+        };
+        let _ = net.run(&input);
+    }
+}
+
 fn clip_merges(_: &Scratch, b: &[u8]) {
     if let Ok(t) = gait_diffuse::ClipTokenizer::from_merges(&String::from_utf8_lossy(b)) {
         let _ = t.encode("a person walking with intact legs, full body, photo");
@@ -333,6 +354,15 @@ pub const TARGETS: &[Target] = &[
         seeds: &["crates/gait-pose/tests/fixtures/openpose/net"],
         ext: "pth",
         run: pth,
+    },
+    Target {
+        name: "onnx",
+        seeds: &[
+            "crates/gait-pose/tests/fixtures/openpose/net/coco18.onnx",
+            "crates/gait-pose/tests/fixtures/openpose/net/body25.onnx",
+        ],
+        ext: "onnx",
+        run: onnx,
     },
     Target {
         name: "clip_merges",
