@@ -257,7 +257,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let write = |json: &str| std::fs::write(dir.path().join("config.json"), json).unwrap();
         write(r#"{"layers_per_block": 1000000000000}"#);
-        let e = read_config::<UnetConfig>(dir.path()).unwrap_err().to_string();
+        let e = read_config::<UnetConfig>(dir.path())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("layers_per_block is 1000000000000"), "{e}");
         write(r#"{"norm_num_groups": 0}"#);
         assert!(read_config::<VaeConfig>(dir.path()).is_err());

@@ -50,7 +50,10 @@ impl Tensor {
         let want = self.shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
         match want == Some(n) {
             true => Ok(()),
-            false => Err(format!("tensor {}: {n} values for shape {:?}", self.name, self.shape)),
+            false => Err(format!(
+                "tensor {}: {n} values for shape {:?}",
+                self.name, self.shape
+            )),
         }
     }
 
