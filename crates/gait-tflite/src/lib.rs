@@ -9,6 +9,7 @@ mod flatbuf;
 mod kernels;
 mod model;
 mod onnx;
+mod operator_io;
 mod same;
 
 pub use candle::CandleGraph;

@@ -9,6 +9,7 @@ use builder::Builder;
 use proto::{Attr, Pb, f32_tensor, i64_tensor, value_info};
 
 use crate::model::{Activation, Graph, Op, OpOptions, Operator, Padding, Tensor};
+use crate::operator_io::{ConvParams, OpIo};
 use crate::same::{self, nchw_axis};
 
 type R<T> = Result<T, String>;
@@ -22,48 +23,26 @@ pub fn to_onnx(graph: &Graph) -> R<Vec<u8>> {
     };
     e.input(graph)?;
     for (k, op) in graph.operators.iter().enumerate() {
-        let mut io = Io::new(k, op)?;
-        io.pre = e.b.fresh("pre");
+        let io = Io {
+            op: OpIo::new(k, op)?,
+            pre: e.b.fresh("pre"),
+        };
         e.operator(&io, op)?;
     }
     e.outputs(graph);
     Ok(e.model())
 }
 
-/// One operator's tensors: its given inputs and its (first) output.
-struct Io {
-    k: usize,
-    ins: Vec<usize>,
-    out: usize,
-    /// The name of the value before the fused activation.
+/// One operator's tensors, and the name of its value before the fused activation.
+struct Io<'o> {
+    op: OpIo<'o>,
     pre: String,
 }
 
-impl Io {
-    fn new(k: usize, op: &Operator) -> R<Self> {
-        let ins = op
-            .inputs
-            .iter()
-            .filter(|&&i| i >= 0)
-            .map(|&i| i as usize)
-            .collect();
-        let out = *op
-            .outputs
-            .first()
-            .ok_or(format!("operator {k} has no output"))? as usize;
-        Ok(Io {
-            k,
-            ins,
-            out,
-            pre: String::new(),
-        })
-    }
-
-    fn input(&self, j: usize) -> R<usize> {
-        self.ins
-            .get(j)
-            .copied()
-            .ok_or(format!("operator {}: missing input {j}", self.k))
+impl<'o> std::ops::Deref for Io<'o> {
+    type Target = OpIo<'o>;
+    fn deref(&self) -> &OpIo<'o> {
+        &self.op
     }
 }
 
@@ -124,30 +103,10 @@ impl Exporter<'_> {
                 self.t[io.out].holds(v.len())?;
                 self.konst[io.out] = Some(v);
             }
-            (
-                Op::Conv2d,
-                &OpOptions::Conv {
-                    padding,
-                    stride,
-                    dilation,
-                    activation,
-                },
-            ) => {
-                let w = Window::of(stride, dilation, padding);
-                self.conv(io, w, activation, false)?
-            }
-            (
-                Op::DepthwiseConv2d,
-                &OpOptions::Depthwise {
-                    padding,
-                    stride,
-                    dilation,
-                    activation,
-                    ..
-                },
-            ) => {
-                let w = Window::of(stride, dilation, padding);
-                self.conv(io, w, activation, true)?
+            (Op::Conv2d | Op::DepthwiseConv2d, o) => {
+                let c = ConvParams::of(o).ok_or(format!("operator {k}: convolution options"))?;
+                let w = Window::of(c.stride, c.dilation, c.padding);
+                self.conv(io, w, c.activation, op.op == Op::DepthwiseConv2d)?
             }
             (Op::Add, &OpOptions::Add { activation }) => self.binary(io, "Add", activation)?,
             (Op::Mul, &OpOptions::Add { activation }) => self.binary(io, "Mul", activation)?,

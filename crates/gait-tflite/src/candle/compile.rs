@@ -9,6 +9,7 @@ use crate::kernels::eltwise::{Binary, Unary};
 use crate::kernels::pool::Pool;
 use crate::kernels::resize::{self, Resize};
 use crate::model::{Activation, Graph, Op, OpOptions, Operator, Padding};
+use crate::operator_io::{ConvParams, OpIo};
 use crate::same;
 
 /// The graph's nodes in order, and every tensor's constant value (those dequantized or
@@ -20,7 +21,7 @@ pub(super) fn nodes(graph: &Graph) -> R<(Vec<Node>, Vec<Option<Vec<f32>>>)> {
     };
     let mut nodes = Vec::new();
     for (k, op) in graph.operators.iter().enumerate() {
-        let io = Io::new(k, op)?;
+        let io = OpIo::new(k, op)?;
         if matches!(op.op, Op::Dequantize | Op::Densify) {
             let v = c.constant(&io, io.input(0)?)?;
             graph.tensors[io.out].holds(v.len())?;
@@ -37,37 +38,6 @@ pub(super) fn nodes(graph: &Graph) -> R<(Vec<Node>, Vec<Option<Vec<f32>>>)> {
         });
     }
     Ok((nodes, c.values))
-}
-
-/// One operator's tensors: its given inputs and its (first) output.
-struct Io<'o> {
-    k: usize,
-    op: &'o Operator,
-    ins: Vec<usize>,
-    out: usize,
-}
-
-impl<'o> Io<'o> {
-    fn new(k: usize, op: &'o Operator) -> R<Self> {
-        let ins = op
-            .inputs
-            .iter()
-            .filter(|&&i| i >= 0)
-            .map(|&i| i as usize)
-            .collect();
-        let out = *op
-            .outputs
-            .first()
-            .ok_or(format!("operator {k} has no output"))? as usize;
-        Ok(Io { k, op, ins, out })
-    }
-
-    fn input(&self, j: usize) -> R<usize> {
-        self.ins
-            .get(j)
-            .copied()
-            .ok_or(format!("operator {}: missing input {j}", self.k))
-    }
 }
 
 /// A convolution's or pooling's stride, dilation and padding rule.
@@ -95,7 +65,7 @@ struct Compiler<'g> {
 }
 
 impl Compiler<'_> {
-    fn constant(&self, io: &Io, i: usize) -> R<Vec<f32>> {
+    fn constant(&self, io: &OpIo, i: usize) -> R<Vec<f32>> {
         self.values[i].clone().ok_or(format!(
             "operator {} ({:?}): input {} is not constant",
             io.k, io.op.op, self.graph.tensors[i].name
@@ -106,14 +76,14 @@ impl Compiler<'_> {
         &self.graph.tensors[i].shape
     }
 
-    fn four(&self, io: &Io, i: usize, what: &str) -> R<[usize; 4]> {
+    fn four(&self, io: &OpIo, i: usize, what: &str) -> R<[usize; 4]> {
         let v = self.shape(i);
         v.try_into()
             .map_err(|_| format!("operator {}: {what} {v:?} is not 4-D", io.k))
     }
 
     /// The operator's bias (input 2), zeros when it has none.
-    fn bias(&self, io: &Io, o: usize) -> R<Vec<f32>> {
+    fn bias(&self, io: &OpIo, o: usize) -> R<Vec<f32>> {
         match io.ins.get(2) {
             Some(&bi) => self.constant(io, bi),
             None => Ok(vec![0.0; o]),
@@ -121,42 +91,22 @@ impl Compiler<'_> {
     }
 
     /// The node of one operator, with the activation it is fused with.
-    fn step(&self, io: &Io, op: &Operator) -> R<(Step, Activation)> {
+    fn step(&self, io: &OpIo, op: &Operator) -> R<(Step, Activation)> {
         let none = Activation::None;
         Ok(match (&op.op, &op.options) {
-            (
-                Op::Conv2d,
-                &OpOptions::Conv {
-                    padding,
-                    stride,
-                    dilation,
-                    activation,
-                },
-            ) => {
+            (Op::Conv2d | Op::DepthwiseConv2d, o) => {
+                let c =
+                    ConvParams::of(o).ok_or(format!("operator {}: convolution options", io.k))?;
                 let w = Window {
-                    padding,
-                    stride,
-                    dilation,
+                    padding: c.padding,
+                    stride: c.stride,
+                    dilation: c.dilation,
                 };
-                (Step::Conv(self.conv(io, w, activation)?), activation)
-            }
-            (
-                Op::DepthwiseConv2d,
-                &OpOptions::Depthwise {
-                    padding,
-                    stride,
-                    dilation,
-                    multiplier,
-                    activation,
-                },
-            ) => {
-                let w = Window {
-                    padding,
-                    stride,
-                    dilation,
+                let step = match op.op {
+                    Op::Conv2d => Step::Conv(self.conv(io, w, c.activation)?),
+                    _ => Step::Depthwise(self.depthwise(io, w, c.multiplier, c.activation)?),
                 };
-                let d = self.depthwise(io, w, multiplier, activation)?;
-                (Step::Depthwise(d), activation)
+                (step, c.activation)
             }
             (Op::Add, OpOptions::Add { activation }) => (Step::Binary(Binary::Add), *activation),
             (Op::Mul, OpOptions::Add { activation }) => (Step::Binary(Binary::Mul), *activation),
@@ -203,7 +153,7 @@ impl Compiler<'_> {
         })
     }
 
-    fn conv(&self, io: &Io, w: Window, activation: Activation) -> R<Conv> {
+    fn conv(&self, io: &OpIo, w: Window, activation: Activation) -> R<Conv> {
         let xs = self.four(io, io.input(0)?, "input")?;
         let ws = self.four(io, io.input(1)?, "weights")?;
         let os = self.four(io, io.out, "output")?;
@@ -222,7 +172,7 @@ impl Compiler<'_> {
         Ok(conv)
     }
 
-    fn depthwise(&self, io: &Io, w: Window, multiplier: usize, act: Activation) -> R<Depthwise> {
+    fn depthwise(&self, io: &OpIo, w: Window, multiplier: usize, act: Activation) -> R<Depthwise> {
         let xs = self.four(io, io.input(0)?, "input")?;
         let [_, kh, kw, oc] = self.four(io, io.input(1)?, "weights")?;
         let os = self.four(io, io.out, "output")?;
@@ -239,7 +189,7 @@ impl Compiler<'_> {
         })
     }
 
-    fn pool(&self, io: &Io, w: Window, filter: (usize, usize), act: Activation) -> R<Pool> {
+    fn pool(&self, io: &OpIo, w: Window, filter: (usize, usize), act: Activation) -> R<Pool> {
         let xs = self.four(io, io.input(0)?, "input")?;
         let os = self.four(io, io.out, "output")?;
         Ok(Pool {
@@ -252,7 +202,7 @@ impl Compiler<'_> {
         })
     }
 
-    fn pad(&self, io: &Io) -> R<Step> {
+    fn pad(&self, io: &OpIo) -> R<Step> {
         let p = self.graph.tensors[io.input(1)?]
             .i32s()
             .ok_or(format!("operator {}: paddings not constant", io.k))?;
@@ -263,7 +213,7 @@ impl Compiler<'_> {
         ))
     }
 
-    fn concat(&self, io: &Io, axis: i32) -> R<Step> {
+    fn concat(&self, io: &OpIo, axis: i32) -> R<Step> {
         let r = self.shape(io.out).len() as i64;
         let a = if axis < 0 {
             axis as i64 + r
@@ -276,7 +226,7 @@ impl Compiler<'_> {
         Ok(Step::Concat(a as usize))
     }
 
-    fn resize(&self, io: &Io, a: bool, h: bool) -> R<Step> {
+    fn resize(&self, io: &OpIo, a: bool, h: bool) -> R<Step> {
         let xs = self.four(io, io.input(0)?, "input")?;
         let os = self.four(io, io.out, "output")?;
         Ok(Step::Resize(Resize {
@@ -287,7 +237,7 @@ impl Compiler<'_> {
 
     /// MediaPipe's `Convolution2DTransposeBias`, where kernel == stride: inputs are the
     /// activations, weights [o, kh, kw, i] and bias [o].
-    fn transpose_conv(&self, io: &Io) -> R<Step> {
+    fn transpose_conv(&self, io: &OpIo) -> R<Step> {
         let (xs, ws, os) = (
             self.shape(io.input(0)?),
             self.shape(io.input(1)?),
