@@ -82,7 +82,7 @@ impl CandleGraph {
 }
 
 /// The constant values as tensors of their declared shapes.
-fn constant_tensors(graph: &Graph, values: Vec<Option<Vec<f32>>>) -> R<Vec<Option<Tensor>>> {
+fn constant_tensors(graph: &Graph, values: compile::Constants) -> R<Vec<Option<Tensor>>> {
     values
         .into_iter()
         .zip(&graph.tensors)

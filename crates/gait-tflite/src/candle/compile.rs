@@ -12,9 +12,12 @@ use crate::model::{Activation, Graph, Op, OpOptions, Operator, Padding};
 use crate::operator_io::{ConvParams, OpIo};
 use crate::same;
 
+/// Every tensor's constant value, `None` for activations.
+pub(super) type Constants = Vec<Option<Vec<f32>>>;
+
 /// The graph's nodes in order, and every tensor's constant value (those dequantized or
 /// densified by an operator included).
-pub(super) fn nodes(graph: &Graph) -> R<(Vec<Node>, Vec<Option<Vec<f32>>>)> {
+pub(super) fn nodes(graph: &Graph) -> R<(Vec<Node>, Constants)> {
     let mut c = Compiler {
         graph,
         values: graph.tensors.iter().map(|t| t.f32s()).collect(),
@@ -61,7 +64,7 @@ impl Window {
 
 struct Compiler<'g> {
     graph: &'g Graph,
-    values: Vec<Option<Vec<f32>>>,
+    values: Constants,
 }
 
 impl Compiler<'_> {
