@@ -216,98 +216,88 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        "child" => {
-            let Some(t) = args.get(1).and_then(|n| target(n)) else {
-                return usage();
-            };
-            let (o, files) = match parse(&args[2..]) {
-                Ok(x) => x,
-                Err(e) => {
-                    eprintln!("gait-fuzz: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            let stats = engine::fuzz(
-                t,
-                o.budget,
-                o.seed,
-                &o.crashes,
-                files.first().map(PathBuf::as_path),
-            );
-            for (p, why) in &stats.crashes {
-                println!("crash {}\t{why}", p.display());
-            }
-            println!("stats {} {}", stats.inputs, stats.seconds);
-            ExitCode::SUCCESS
-        }
+        "child" => match args.get(1).and_then(|n| target(n)) {
+            Some(t) => with_options(&args[2..], |o, files| child(t, o, files)),
+            None => usage(),
+        },
         "patch" => match (args.get(1), args.get(2)) {
             (Some(seed), Some(input)) => patch(seed, input),
             _ => usage(),
         },
-        "replay" => {
-            let (o, files) = match parse(&args[1..]) {
-                Ok(x) => x,
-                Err(e) => {
-                    eprintln!("gait-fuzz: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            let scratch = gait_fuzz::targets::Scratch::new().expect("a scratch folder");
-            let mut bad = 0;
-            for f in &files {
-                let bytes = std::fs::read(f).unwrap_or_default();
-                for t in &o.targets {
-                    if let Err(why) = engine::run_one(t, &scratch, &bytes) {
-                        bad += 1;
-                        println!("{} on {}: {why}", t.name, f.display());
-                    }
-                }
-            }
-            if bad > 0 {
-                ExitCode::FAILURE
-            } else {
-                ExitCode::SUCCESS
-            }
-        }
-        "run" => {
-            let (o, _) = match parse(&args[1..]) {
-                Ok(x) => x,
-                Err(e) => {
-                    eprintln!("gait-fuzz: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            println!(
-                "| target | inputs | seconds | inputs/s | crashes |\n| --- | --- | --- | --- | --- |"
-            );
-            let mut all = Vec::new();
-            for t in &o.targets {
-                let (n, s, crashes) = run_target(t, &o);
-                println!(
-                    "| {} | {n} | {s:.1} | {:.0} | {} |",
-                    t.name,
-                    n as f64 / s.max(1e-9),
-                    crashes.len()
-                );
-                all.extend(crashes.into_iter().map(|c| (t.name, c)));
-            }
-            for (name, (p, why)) in &all {
-                let bytes = std::fs::read(p).unwrap_or_default();
-                eprintln!(
-                    "CRASH {name}: {why}\n  input {} ({} bytes)",
-                    p.display(),
-                    bytes.len()
-                );
-                if bytes.len() <= 4096 {
-                    eprintln!("  hex {}", hex(&bytes));
-                }
-            }
-            if all.is_empty() {
-                ExitCode::SUCCESS
-            } else {
-                ExitCode::FAILURE
-            }
-        }
+        "replay" => with_options(&args[1..], replay),
+        "run" => with_options(&args[1..], |o, _| run(o)),
         _ => usage(),
+    }
+}
+
+/// Runs `f` on the parsed options, or says what is wrong with them (exit 2).
+fn with_options(args: &[String], f: impl FnOnce(&Options, &[PathBuf]) -> ExitCode) -> ExitCode {
+    match parse(args) {
+        Ok((o, files)) => f(&o, &files),
+        Err(e) => {
+            eprintln!("gait-fuzz: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// The child process of `run`: fuzzes `t`, printing its crashes and counts for the parent.
+fn child(t: &Target, o: &Options, files: &[PathBuf]) -> ExitCode {
+    let current = files.first().map(PathBuf::as_path);
+    let stats = engine::fuzz(t, o.budget, o.seed, &o.crashes, current);
+    for (p, why) in &stats.crashes {
+        println!("crash {}\t{why}", p.display());
+    }
+    println!("stats {} {}", stats.inputs, stats.seconds);
+    ExitCode::SUCCESS
+}
+
+/// Runs each file through the chosen targets; fails when any of them panics.
+fn replay(o: &Options, files: &[PathBuf]) -> ExitCode {
+    let scratch = Scratch::new().expect("a scratch folder");
+    let mut bad = 0;
+    for f in files {
+        let bytes = engine::read_input(f).unwrap_or_default();
+        for t in &o.targets {
+            if let Err(why) = engine::run_one(t, &scratch, &bytes) {
+                bad += 1;
+                println!("{} on {}: {why}", t.name, f.display());
+            }
+        }
+    }
+    match bad {
+        0 => ExitCode::SUCCESS,
+        _ => ExitCode::FAILURE,
+    }
+}
+
+/// Fuzzes every chosen target in turn; prints the table, then each crash with its input.
+fn run(o: &Options) -> ExitCode {
+    println!("| target | inputs | seconds | inputs/s | crashes |\n| --- | --- | --- | --- | --- |");
+    let mut all = Vec::new();
+    for t in &o.targets {
+        let (n, s, crashes) = run_target(t, o);
+        let rate = n as f64 / s.max(1e-9);
+        println!(
+            "| {} | {n} | {s:.1} | {rate:.0} | {} |",
+            t.name,
+            crashes.len()
+        );
+        all.extend(crashes.into_iter().map(|c| (t.name, c)));
+    }
+    for (name, (p, why)) in &all {
+        let bytes = std::fs::read(p).unwrap_or_default();
+        eprintln!(
+            "CRASH {name}: {why}\n  input {} ({} bytes)",
+            p.display(),
+            bytes.len()
+        );
+        if bytes.len() <= 4096 {
+            eprintln!("  hex {}", hex(&bytes));
+        }
+    }
+    match all.is_empty() {
+        true => ExitCode::SUCCESS,
+        false => ExitCode::FAILURE,
     }
 }
