@@ -19,10 +19,12 @@ impl<'o> OpIo<'o> {
             .filter(|&&i| i >= 0)
             .map(|&i| i as usize)
             .collect();
-        let out = *op
+        // -1 marks an absent tensor: allowed for optional inputs, never for the output.
+        let out = op
             .outputs
             .first()
-            .ok_or(format!("operator {k} has no output"))? as usize;
+            .and_then(|&o| usize::try_from(o).ok())
+            .ok_or(format!("operator {k} has no output"))?;
         Ok(OpIo { k, op, ins, out })
     }
 
