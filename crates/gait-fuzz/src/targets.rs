@@ -196,6 +196,10 @@ fn diffusers_config(s: &Scratch, b: &[u8]) {
     let dir = s.path().join("sd");
     let tiny = crate::repo().join(TINY);
     let slot = config_slot(b);
+    if !dir.join("tokenizer").exists() {
+        let _ = std::fs::create_dir_all(&dir);
+        let _ = std::os::unix::fs::symlink(tiny.join("tokenizer"), dir.join("tokenizer"));
+    }
     for (i, name) in MODEL_SLOTS.iter().enumerate() {
         let (from, to) = (tiny.join(name), dir.join(name));
         if !to.is_dir() {
@@ -203,7 +207,6 @@ fn diffusers_config(s: &Scratch, b: &[u8]) {
             for f in std::fs::read_dir(&from).into_iter().flatten().flatten() {
                 let _ = std::os::unix::fs::symlink(f.path(), to.join(f.file_name()));
             }
-            let _ = std::os::unix::fs::symlink(tiny.join("tokenizer"), dir.join("tokenizer"));
         }
         let config = to.join("config.json");
         let _ = std::fs::remove_file(&config);
