@@ -13,6 +13,7 @@
 pub mod engine;
 pub mod mutate;
 pub mod patch;
+pub mod recording;
 pub mod targets;
 
 use std::path::PathBuf;

@@ -272,6 +272,16 @@ fn video(s: &Scratch, b: &[u8]) {
     }
 }
 
+/// The video reader on a recorded ffprobe and ffmpeg run ([`crate::recording`]): all that our
+/// code does with a video, in-process; `video` runs the real tools on mutated video files.
+fn video_stream(s: &Scratch, b: &[u8]) {
+    let (probe, decoded) = crate::recording::unpack(b);
+    if let Ok(info) = gait_pipeline::input::parse_ffprobe(&s.path().join("clip.mp4"), probe) {
+        let mut frames = info.replay(decoded);
+        while let Ok(Some(_)) = frames.next_frame() {}
+    }
+}
+
 /// Every target, in the order the runner takes them.
 pub const TARGETS: &[Target] = &[
     Target {
@@ -401,6 +411,12 @@ pub const TARGETS: &[Target] = &[
         seeds: &["fuzz/seeds/ffprobe_json"],
         ext: "json",
         run: ffprobe_json,
+    },
+    Target {
+        name: "video_stream",
+        seeds: &["fuzz/seeds/video_stream"],
+        ext: "rec",
+        run: video_stream,
     },
     Target {
         name: "video",

@@ -10,6 +10,7 @@ use sha2::{Digest, Sha256};
 
 use crate::PipelineError;
 use crate::video_decoder::VideoDecoder;
+pub use crate::video_decoder::{DecoderRecording, ffmpeg_command};
 
 const VIDEO_EXTENSIONS: [&str; 6] = ["mp4", "avi", "mov", "webm", "mkv", "m4v"];
 const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "bmp", "tif"];
@@ -139,6 +140,16 @@ impl InputInfo {
             next: 0,
         })
     }
+
+    /// Reads the frames of a recorded ffmpeg run as if ffmpeg decoded this video now (for the
+    /// fuzzer and tests, which drive the reader without a process).
+    pub fn replay(&self, recording: DecoderRecording) -> FrameReader {
+        FrameReader {
+            info: self.clone(),
+            source: Source::Video(VideoDecoder::replay(&self.path, recording)),
+            next: 0,
+        }
+    }
 }
 
 pub(crate) fn hex(bytes: &[u8]) -> String {
@@ -178,12 +189,18 @@ pub(crate) fn ffmpeg_missing(path: &Path, e: std::io::Error) -> PipelineError {
     )
 }
 
-fn probe_video(path: &Path) -> Result<InputInfo, PipelineError> {
-    let out = Command::new("ffprobe")
-        .args(["-v", "error", "-select_streams", "v:0", "-show_entries"])
+/// The ffprobe command that describes `path` in the JSON [`parse_ffprobe`] reads.
+pub fn ffprobe_command(path: &Path) -> Command {
+    let mut cmd = Command::new("ffprobe");
+    cmd.args(["-v", "error", "-select_streams", "v:0", "-show_entries"])
         .arg("stream=width,height,r_frame_rate,nb_frames:stream_side_data=rotation")
         .args(["-of", "json"])
-        .arg(path)
+        .arg(path);
+    cmd
+}
+
+fn probe_video(path: &Path) -> Result<InputInfo, PipelineError> {
+    let out = ffprobe_command(path)
         .stdin(Stdio::null())
         .output()
         .map_err(|e| ffmpeg_missing(path, e))?;

@@ -3,8 +3,12 @@
 //! ffmpeg's messages are read on their own thread while frames are read here: a damaged video
 //! makes ffmpeg report an error per frame, and once a pipe's 64 KiB fill up, a reader that
 //! left them unread waits on the frame pipe while ffmpeg waits on the message pipe, forever.
+//!
+//! What the reader does with ffmpeg's output is kept apart from the process ([`FrameSource`]),
+//! so that a [`DecoderRecording`] of a run can replace it: the fuzzer and the tests drive the
+//! reader with any bytes, exit status and messages, without spawning ffmpeg per input.
 
-use std::io::Read;
+use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::thread::JoinHandle;
@@ -14,19 +18,39 @@ use crate::PipelineError;
 /// ffmpeg's messages kept for the error (the first line is what the user sees).
 const MAX_MESSAGES: usize = 64 * 1024;
 
-/// A running ffmpeg decoding one video.
-pub(crate) struct VideoDecoder {
-    path: PathBuf,
+/// How a decoder ended: whether it succeeded, and what it reported.
+#[derive(Clone)]
+struct Ending {
+    success: bool,
+    messages: String,
+}
+
+/// Where a video's decoded frames come from: ffmpeg, or a recording of it.
+trait FrameSource: Send {
+    /// The raw rgb24 frames, one after another.
+    fn output(&mut self) -> Option<&mut dyn Read>;
+    /// Waits for the decoder to end.
+    fn end(&mut self) -> std::io::Result<Ending>;
+}
+
+/// The ffmpeg command that decodes `path` to rgb24 frames on its standard output.
+pub fn ffmpeg_command(path: &Path) -> Command {
+    let mut cmd = Command::new("ffmpeg");
+    cmd.args(["-v", "error", "-nostdin", "-i"])
+        .arg(path)
+        .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]);
+    cmd
+}
+
+/// A running ffmpeg.
+struct Ffmpeg {
     child: Child,
     messages: Option<JoinHandle<String>>,
 }
 
-impl VideoDecoder {
-    pub(crate) fn spawn(path: &Path) -> Result<Self, PipelineError> {
-        let mut child = Command::new("ffmpeg")
-            .args(["-v", "error", "-nostdin", "-i"])
-            .arg(path)
-            .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+impl Ffmpeg {
+    fn spawn(path: &Path) -> Result<Self, PipelineError> {
+        let mut child = ffmpeg_command(path)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -43,23 +67,110 @@ impl VideoDecoder {
                 String::from_utf8_lossy(&kept).into_owned()
             })
         });
-        Ok(VideoDecoder {
-            path: path.to_path_buf(),
-            child,
+        Ok(Ffmpeg { child, messages })
+    }
+}
+
+impl FrameSource for Ffmpeg {
+    fn output(&mut self) -> Option<&mut dyn Read> {
+        self.child.stdout.as_mut().map(|s| s as &mut dyn Read)
+    }
+
+    fn end(&mut self) -> std::io::Result<Ending> {
+        let status = self.child.wait()?;
+        let messages = self
+            .messages
+            .take()
+            .and_then(|h| h.join().ok())
+            .unwrap_or_default();
+        Ok(Ending {
+            success: status.success(),
             messages,
         })
+    }
+}
+
+impl Drop for Ffmpeg {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// What one ffmpeg run wrote: its frame bytes, whether it exited with success, its messages.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecoderRecording {
+    pub frames: Vec<u8>,
+    pub success: bool,
+    pub messages: String,
+}
+
+impl DecoderRecording {
+    /// Runs [`ffmpeg_command`] on `path` to the end and keeps what it wrote.
+    pub fn record(path: &Path) -> std::io::Result<Self> {
+        let out = ffmpeg_command(path).stdin(Stdio::null()).output()?;
+        Ok(DecoderRecording {
+            frames: out.stdout,
+            success: out.status.success(),
+            messages: String::from_utf8_lossy(&out.stderr).into_owned(),
+        })
+    }
+}
+
+/// A recording played back as the decoder's output.
+struct Playback {
+    frames: Cursor<Vec<u8>>,
+    ending: Ending,
+}
+
+impl FrameSource for Playback {
+    fn output(&mut self) -> Option<&mut dyn Read> {
+        Some(&mut self.frames)
+    }
+
+    fn end(&mut self) -> std::io::Result<Ending> {
+        Ok(self.ending.clone())
+    }
+}
+
+/// A video being decoded, frame by frame.
+pub(crate) struct VideoDecoder {
+    path: PathBuf,
+    source: Box<dyn FrameSource>,
+}
+
+impl VideoDecoder {
+    pub(crate) fn spawn(path: &Path) -> Result<Self, PipelineError> {
+        Ok(VideoDecoder {
+            path: path.to_path_buf(),
+            source: Box::new(Ffmpeg::spawn(path)?),
+        })
+    }
+
+    /// A decoder that plays `recording` back as if ffmpeg decoded `path` now.
+    pub(crate) fn replay(path: &Path, recording: DecoderRecording) -> Self {
+        let playback = Playback {
+            frames: Cursor::new(recording.frames),
+            ending: Ending {
+                success: recording.success,
+                messages: recording.messages,
+            },
+        };
+        VideoDecoder {
+            path: path.to_path_buf(),
+            source: Box::new(playback),
+        }
     }
 
     /// Fills `buf` with the next frame: the bytes read (0 at the end of the output).
     pub(crate) fn read_frame(&mut self, buf: &mut [u8]) -> Result<usize, PipelineError> {
-        let stdout = self
-            .child
-            .stdout
-            .as_mut()
+        let output = self
+            .source
+            .output()
             .ok_or_else(|| PipelineError::input(&self.path, "ffmpeg has no output"))?;
         let mut filled = 0;
         while filled < buf.len() {
-            match stdout.read(&mut buf[filled..]) {
+            match output.read(&mut buf[filled..]) {
                 Ok(0) => break,
                 Ok(n) => filled += n,
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
@@ -71,17 +182,12 @@ impl VideoDecoder {
 
     /// At the end of ffmpeg's output after `frames` frames: a clean end, or the decoder's error.
     pub(crate) fn finish(&mut self, frames: usize) -> Result<(), PipelineError> {
-        let status = self
-            .child
-            .wait()
+        let Ending { success, messages } = self
+            .source
+            .end()
             .map_err(|e| PipelineError::input(&self.path, e))?;
-        let err = self
-            .messages
-            .take()
-            .and_then(|h| h.join().ok())
-            .unwrap_or_default();
-        if !status.success() || (frames == 0 && !err.trim().is_empty()) {
-            let first = err
+        if !success || (frames == 0 && !messages.trim().is_empty()) {
+            let first = messages
                 .lines()
                 .find(|l| !l.trim().is_empty())
                 .unwrap_or("ffmpeg failed")
@@ -96,13 +202,6 @@ impl VideoDecoder {
             return Err(PipelineError::input(&self.path, "the video has no frames"));
         }
         Ok(())
-    }
-}
-
-impl Drop for VideoDecoder {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
     }
 }
 
@@ -139,6 +238,49 @@ mod tests {
         let damaged = dir.join("damaged.avi");
         std::fs::write(&damaged, bytes).unwrap();
         damaged
+    }
+
+    /// The reader over a recorded run of a 4x2 video (24 bytes a frame).
+    fn replay(frames: Vec<u8>, success: bool, messages: &str) -> Vec<Result<usize, String>> {
+        let probe = br#"{"streams": [{"width": 4, "height": 2, "r_frame_rate": "30/1"}]}"#;
+        let info = crate::input::parse_ffprobe(std::path::Path::new("clip.mp4"), probe).unwrap();
+        let mut reader = info.replay(super::DecoderRecording {
+            frames,
+            success,
+            messages: messages.to_string(),
+        });
+        let mut seen = Vec::new();
+        loop {
+            match reader.next_frame() {
+                Ok(Some(f)) => seen.push(Ok(f.index)),
+                Ok(None) => return seen,
+                Err(e) => {
+                    seen.push(Err(e.to_string()));
+                    return seen;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn recorded_runs_end_as_ffmpeg_ended() {
+        assert_eq!(replay(vec![7; 48], true, ""), vec![Ok(0), Ok(1)]);
+        // Frames then a failure: the failure is reported with ffmpeg's first message line.
+        let end = replay(vec![7; 24], false, "\n[h264] broken slice\nmore\n");
+        assert_eq!(end[0], Ok(0));
+        let err = end[1].clone().unwrap_err();
+        assert!(
+            err.contains("cannot decode the video: [h264] broken slice"),
+            "{err}"
+        );
+        let err = replay(vec![7; 30], true, "")[1].clone().unwrap_err();
+        assert!(err.contains("frame 1 is truncated"), "{err}");
+        let err = replay(Vec::new(), true, "")[0].clone().unwrap_err();
+        assert!(err.contains("the video has no frames"), "{err}");
+        let err = replay(Vec::new(), true, "moov atom not found")[0]
+            .clone()
+            .unwrap_err();
+        assert!(err.contains("moov atom not found"), "{err}");
     }
 
     #[test]

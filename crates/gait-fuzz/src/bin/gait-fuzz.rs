@@ -5,6 +5,7 @@
 //! gait-fuzz run [--target NAME]... [--seconds S] [--inputs N] [--seed N] [--crashes DIR]
 //! gait-fuzz replay --target NAME FILE...
 //! gait-fuzz patch SEED INPUT
+//! gait-fuzz record-video VIDEO OUT
 //! gait-fuzz list
 //! ```
 //! `run` prints a table (inputs tried, inputs per second, crashes per target) and exits 1 when
@@ -70,7 +71,7 @@ struct Options {
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: gait-fuzz run [--target NAME]... [--seconds S] [--inputs N] [--seed N] [--crashes DIR]\n       gait-fuzz replay --target NAME FILE...\n       gait-fuzz patch SEED INPUT\n       gait-fuzz list"
+        "usage: gait-fuzz run [--target NAME]... [--seconds S] [--inputs N] [--seed N] [--crashes DIR]\n       gait-fuzz replay --target NAME FILE...\n       gait-fuzz patch SEED INPUT\n       gait-fuzz record-video VIDEO OUT\n       gait-fuzz list"
     );
     ExitCode::from(2)
 }
@@ -204,6 +205,19 @@ fn patch(seed: &str, input: &str) -> ExitCode {
     }
 }
 
+/// Writes a `video_stream` seed: ffprobe's and ffmpeg's output on `video`, as gait runs them.
+fn record_video(video: &str, out: &str) -> ExitCode {
+    match gait_fuzz::recording::record(std::path::Path::new(video))
+        .and_then(|bytes| std::fs::write(out, bytes))
+    {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("gait-fuzz: cannot record {video} to {out} ({e})");
+            ExitCode::from(2)
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(cmd) = args.first() else {
@@ -222,6 +236,10 @@ fn main() -> ExitCode {
         },
         "patch" => match (args.get(1), args.get(2)) {
             (Some(seed), Some(input)) => patch(seed, input),
+            _ => usage(),
+        },
+        "record-video" => match (args.get(1), args.get(2)) {
+            (Some(video), Some(out)) => record_video(video, out),
             _ => usage(),
         },
         "replay" => with_options(&args[1..], replay),
