@@ -9,8 +9,8 @@ use gait_core::Frame;
 use sha2::{Digest, Sha256};
 
 use crate::PipelineError;
+pub use crate::video_decoder::DecoderRecording;
 use crate::video_decoder::VideoDecoder;
-pub use crate::video_decoder::{DecoderRecording, ffmpeg_command};
 
 const VIDEO_EXTENSIONS: [&str; 6] = ["mp4", "avi", "mov", "webm", "mkv", "m4v"];
 const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "bmp", "tif"];

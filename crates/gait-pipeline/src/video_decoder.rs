@@ -34,7 +34,7 @@ trait FrameSource: Send {
 }
 
 /// The ffmpeg command that decodes `path` to rgb24 frames on its standard output.
-pub fn ffmpeg_command(path: &Path) -> Command {
+fn ffmpeg_command(path: &Path) -> Command {
     let mut cmd = Command::new("ffmpeg");
     cmd.args(["-v", "error", "-nostdin", "-i"])
         .arg(path)
