@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::guidance::Cutoffs;
 use crate::leg_mask::LegMaskConfig;
 use crate::modes::{RegenMode, begin_step};
+use crate::savings::Savings;
 use crate::schedule::SchedulerKind;
 
 /// The paper's prompt for regenerating the person with intact limbs.
@@ -75,6 +76,15 @@ pub struct ControlnetConfig {
     /// outside, its call is skipped (diffusers runs it and multiplies by 0).
     pub control_guidance_start: f64,
     pub control_guidance_end: f64,
+    /// DeepCache (Ma et al. 2024): the UNet's deep features are computed on
+    /// every `cache_interval`-th step and reused between (1: off).
+    pub cache_interval: usize,
+    /// DeepCache's `cache_branch_id` (0..=11 on SD 1.5): where its shallow
+    /// branch leaves the UNet; 0, the shallowest, saves the most.
+    pub cache_branch: usize,
+    /// Token merging (Bolya & Hoffman 2023): the share of tokens merged
+    /// before self-attention at full latent resolution, in [0, 0.9] (0: off).
+    pub token_merge_ratio: f64,
     /// Base seed; frame i uses `seed + i` unless `shared_noise` is set.
     pub seed: u64,
     /// Same initial noise for every frame (steadier video).
@@ -112,6 +122,9 @@ impl Default for ControlnetConfig {
             guidance_end: 1.0,
             control_guidance_start: 0.0,
             control_guidance_end: 1.0,
+            cache_interval: 1,
+            cache_branch: 0,
+            token_merge_ratio: 0.0,
             seed: 0,
             shared_noise: false,
             dtype: Dtype::F32,
@@ -134,6 +147,7 @@ impl ControlnetConfig {
             ));
         }
         self.cutoffs().validate()?;
+        self.savings(0).validate(self.steps)?;
         if self.batch == 0 {
             return Err("regenerator.batch must be at least 1".into());
         }
@@ -166,6 +180,16 @@ impl ControlnetConfig {
             guidance_end: self.guidance_end,
             control_start: self.control_guidance_start,
             control_end: self.control_guidance_end,
+        }
+    }
+
+    /// DeepCache and token merging, token merging's picks seeded by `merge_seed`.
+    pub fn savings(&self, merge_seed: u64) -> Savings {
+        Savings {
+            cache_interval: self.cache_interval,
+            cache_branch: self.cache_branch,
+            token_merge_ratio: self.token_merge_ratio,
+            merge_seed,
         }
     }
 

@@ -8,14 +8,15 @@ use candle_nn::VarBuilder;
 
 use crate::model_config::UnetConfig;
 use crate::unet::encoder::Encoder;
-use crate::unet::{Conv2d, conv2d};
+use crate::unet::{CacheBranch, Conv2d, conv2d};
 
 /// Residuals a ControlNet adds to the UNet: one per skip connection, and one
-/// for the mid block.
+/// for the mid block. A call for DeepCache's shallow step gives the first
+/// skip connections' only, and no mid residual.
 #[derive(Debug, Clone)]
 pub struct ControlResiduals {
     pub down: Vec<Tensor>,
-    pub mid: Tensor,
+    pub mid: Option<Tensor>,
 }
 
 impl ControlResiduals {
@@ -27,10 +28,11 @@ impl ControlResiduals {
             .zip(&other.down)
             .map(|(a, b)| a + b)
             .collect::<Result<Vec<_>>>()?;
-        Ok(ControlResiduals {
-            down,
-            mid: (&self.mid + &other.mid)?,
-        })
+        let mid = match (&self.mid, &other.mid) {
+            (Some(a), Some(b)) => Some((a + b)?),
+            _ => None,
+        };
+        Ok(ControlResiduals { down, mid })
     }
 }
 
@@ -127,18 +129,54 @@ impl ControlNet {
         scale: f64,
     ) -> Result<ControlResiduals> {
         let temb = self.encoder.time(timestep, sample)?;
-        let x =
-            self.conv_in
-                .forward_with(sample, None, Some(&self.cond_embedding.forward(cond)?))?;
-        let (x, states) = self.encoder.down(x, &temb, context)?;
-        let mid = self.encoder.mid(&x, &temb, context)?;
-        let down = states
+        let x = self.embed(sample, cond)?;
+        let (x, states) = self.encoder.down(x, &temb, context, None)?;
+        let mid = self.encoder.mid(&x, &temb, context, None)?;
+        let mid = (self.mid_zero_conv.forward(&mid)? * scale)?;
+        Ok(ControlResiduals {
+            down: self.zero_convs(&states, scale)?,
+            mid: Some(mid),
+        })
+    }
+
+    /// The residuals of DeepCache's shallow step on `branch` only: the first
+    /// skip connections' (the others would go to cached layers). Stock
+    /// DeepCache runs the whole ControlNet and drops the rest; these are the
+    /// same numbers. A branch that needs every skip state gets a full call.
+    pub fn forward_shallow(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        cond: &Tensor,
+        scale: f64,
+        branch: CacheBranch,
+    ) -> Result<ControlResiduals> {
+        if self.encoder.shallow_states(branch) >= self.zero_convs.len() {
+            return self.forward(sample, timestep, context, cond, scale);
+        }
+        let temb = self.encoder.time(timestep, sample)?;
+        let x = self.embed(sample, cond)?;
+        let states = self.encoder.down_shallow(x, &temb, context, branch, None)?;
+        Ok(ControlResiduals {
+            down: self.zero_convs(&states, scale)?,
+            mid: None,
+        })
+    }
+
+    /// `conv_in` of the latents plus the condition image's embedding.
+    fn embed(&self, sample: &Tensor, cond: &Tensor) -> Result<Tensor> {
+        let emb = self.cond_embedding.forward(cond)?;
+        self.conv_in.forward_with(sample, None, Some(&emb))
+    }
+
+    /// Each state through its zero convolution, times `scale`.
+    fn zero_convs(&self, states: &[Tensor], scale: f64) -> Result<Vec<Tensor>> {
+        states
             .iter()
             .zip(&self.zero_convs)
             .map(|(r, c)| c.forward(r)? * scale)
-            .collect::<Result<Vec<_>>>()?;
-        let mid = (self.mid_zero_conv.forward(&mid)? * scale)?;
-        Ok(ControlResiduals { down, mid })
+            .collect()
     }
 
     /// Number of skip-connection residuals (12 for SD 1.5).

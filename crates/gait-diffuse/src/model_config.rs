@@ -10,6 +10,9 @@ use serde::Deserialize;
 
 use crate::DiffuseError;
 
+/// Input channels of an inpainting UNet: latents (4), mask (1), masked-image latents (4).
+pub const INPAINT_UNET_CHANNELS: usize = 9;
+
 /// `attention_head_dim` is a number (SD 1.5) or one per block (SD 2.x).
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(untagged)]

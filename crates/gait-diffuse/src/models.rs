@@ -8,6 +8,8 @@ use candle_core::{DType, Tensor};
 use crate::DiffuseError;
 use crate::controlnet::ControlResiduals;
 use crate::model_config::VaeConfig;
+use crate::savings::Savings;
+use crate::unet::{CacheBranch, UnetSavings};
 use crate::weights::Models;
 
 /// Text encoder, ControlNet, UNet and VAE decoder of one SD + ControlNet pair.
@@ -40,6 +42,45 @@ pub trait DiffusionModels: Send {
         residuals: Option<&ControlResiduals>,
     ) -> Result<Tensor, DiffuseError>;
 
+    /// As [`Self::unet`], with DeepCache's full or shallow step and token
+    /// merging; backends that cannot split their UNet refuse them at load
+    /// ([`Self::check_savings`]).
+    fn unet_saving(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        residuals: Option<&ControlResiduals>,
+        savings: UnetSavings,
+    ) -> Result<Tensor, DiffuseError> {
+        if savings.cache.is_some() || savings.merge.is_some() {
+            return Err(unsupported_savings());
+        }
+        self.unet(sample, timestep, context, residuals)
+    }
+
+    /// The ControlNet residuals a DeepCache shallow step on `branch` uses
+    /// (the first skip connections'); by default the full call.
+    fn controlnet_shallow(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        cond: &Tensor,
+        scale: f64,
+        _branch: CacheBranch,
+    ) -> Result<ControlResiduals, DiffuseError> {
+        self.controlnet(sample, timestep, context, cond, scale)
+    }
+
+    /// Whether these networks can apply `savings`.
+    fn check_savings(&self, savings: &Savings) -> Result<(), DiffuseError> {
+        if savings.any() {
+            return Err(unsupported_savings());
+        }
+        Ok(())
+    }
+
     /// Images `(B, 3, 8h, 8w)` in [-1, 1] from latents already divided by the
     /// VAE's scaling factor.
     fn decode(&self, latents: &Tensor) -> Result<Tensor, DiffuseError>;
@@ -58,7 +99,52 @@ pub trait DiffusionModels: Send {
     }
 }
 
+fn unsupported_savings() -> DiffuseError {
+    DiffuseError::Config(
+        "regenerator.cache_interval > 1 and regenerator.token_merge_ratio > 0 need \
+         backend = \"candle\": the ONNX export is one UNet graph, which cannot stop at \
+         DeepCache's branch or merge tokens inside its attention"
+            .into(),
+    )
+}
+
 impl DiffusionModels for Models {
+    fn unet_saving(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        residuals: Option<&ControlResiduals>,
+        savings: UnetSavings,
+    ) -> Result<Tensor, DiffuseError> {
+        Ok(self
+            .unet
+            .forward_saving(sample, timestep, context, residuals, savings)?)
+    }
+
+    fn controlnet_shallow(
+        &self,
+        sample: &Tensor,
+        timestep: f64,
+        context: &Tensor,
+        cond: &Tensor,
+        scale: f64,
+        branch: CacheBranch,
+    ) -> Result<ControlResiduals, DiffuseError> {
+        Ok(self
+            .controlnet
+            .forward_shallow(sample, timestep, context, cond, scale, branch)?)
+    }
+
+    fn check_savings(&self, savings: &Savings) -> Result<(), DiffuseError> {
+        if let Some(b) = savings.branch() {
+            self.unet
+                .check_branch(b)
+                .map_err(|e| DiffuseError::Config(format!("regenerator.cache_branch: {e}")))?;
+        }
+        Ok(())
+    }
+
     fn encode_text(&self, ids: &Tensor) -> Result<Tensor, DiffuseError> {
         Ok(self.text.forward(&ids.to_dtype(DType::U32)?)?)
     }

@@ -13,13 +13,12 @@ use candle_core::{DType, Device, Tensor};
 use serde::{Deserialize, Serialize};
 
 use crate::DiffuseError;
+use crate::keep_region::{Inpainting, KeepRegion, latent_mask};
+use crate::model_config::INPAINT_UNET_CHANNELS;
 use crate::pipeline::{ControlnetPipeline, DenoiseParams};
 use crate::schedule::Scheduler;
 use crate::tokenizer::ClipTokenizer;
 use crate::weights::{MERGES_FILE, Models};
-
-/// Input channels of an inpainting UNet: latents (4), mask (1), masked-image latents (4).
-pub const INPAINT_UNET_CHANNELS: usize = 9;
 
 /// Where the denoising starts (`mode = "..."` in `[regenerator]`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -75,60 +74,6 @@ pub fn begin_step(steps: usize, strength: f64) -> Result<usize, DiffuseError> {
         )));
     }
     Ok(steps - run)
-}
-
-/// How the denoising loop keeps the unmasked region.
-pub(crate) enum Inpainting {
-    /// 4-channel UNet: the known latents are put back after every step.
-    Blend(KeepRegion),
-    /// 9-channel UNet: `[latents, mask, masked_latents]` is the UNet's input
-    /// (the ControlNet sees the latents only); nothing is put back.
-    Condition {
-        mask: Tensor,
-        masked_latents: Tensor,
-    },
-}
-
-/// Inpainting's known region: the frame's latents, the noise they get and the
-/// latent-size mask (1 = regenerate).
-pub struct KeepRegion {
-    pub image_latents: Tensor,
-    pub noise: Tensor,
-    pub mask: Tensor,
-}
-
-impl KeepRegion {
-    /// `mask * x + (1 - mask) * known`, the known latents noised to `next_t`
-    /// (none after the last step).
-    pub(crate) fn blend(
-        &self,
-        sched: &Scheduler,
-        x: &Tensor,
-        next_t: Option<usize>,
-    ) -> Result<Tensor, DiffuseError> {
-        let known = match next_t {
-            Some(t) => sched.add_noise(&self.image_latents, &self.noise, t)?,
-            None => self.image_latents.clone(),
-        };
-        let keep = (1.0 - &self.mask)?;
-        Ok((x.broadcast_mul(&self.mask)? + known.broadcast_mul(&keep)?)?)
-    }
-}
-
-/// A pixel mask `(B, 1, H, W)` in [0, 1] as diffusers' inpainting uses it:
-/// binarized at 0.5, then nearest-downsampled to the latents by `scale`.
-pub fn latent_mask(mask: &Tensor, scale: usize) -> Result<Tensor, DiffuseError> {
-    let (b, _, h, w) = mask.dims4()?;
-    let binary = mask.ge(0.5)?.to_dtype(mask.dtype())?;
-    let (lh, lw) = (h / scale, w / scale);
-    // torch's "nearest" with an integer factor picks pixel (scale*i, scale*j).
-    Ok(binary
-        .narrow(2, 0, lh * scale)?
-        .narrow(3, 0, lw * scale)?
-        .reshape((b, 1, lh, scale, lw, scale))?
-        .narrow(3, 0, 1)?
-        .narrow(5, 0, 1)?
-        .reshape((b, 1, lh, lw))?)
 }
 
 impl ControlnetPipeline {
@@ -249,20 +194,5 @@ mod tests {
         }
         let err = begin_step(3, 0.2).unwrap_err().to_string();
         assert!(err.contains("no denoising step"), "{err}");
-    }
-
-    #[test]
-    fn latent_mask_binarizes_and_picks_every_scale_th_pixel() {
-        let mut v = vec![0f32; 16 * 16];
-        v[0] = 0.6; // (0, 0) -> cell (0, 0)
-        v[8 * 16 + 1] = 1.0; // (8, 1): not a sampled pixel
-        v[8 * 16 + 8] = 0.4; // below 0.5
-        v[8] = 0.5; // (0, 8) -> cell (0, 1)
-        let m = Tensor::from_vec(v, (1, 1, 16, 16), &Device::Cpu).unwrap();
-        let lm = latent_mask(&m, 8).unwrap();
-        assert_eq!(
-            lm.flatten_all().unwrap().to_vec1::<f32>().unwrap(),
-            vec![1.0, 1.0, 0.0, 0.0]
-        );
     }
 }

@@ -263,7 +263,7 @@ impl OrtDenoiser {
                 let shapes: Vec<Vec<usize>> = r
                     .down
                     .iter()
-                    .chain([&r.mid])
+                    .chain(r.mid.as_ref())
                     .map(|t| t.dims().to_vec())
                     .collect();
                 self.lock_shapes().push((key, shapes.clone()));
@@ -274,7 +274,7 @@ impl OrtDenoiser {
         let (mid, down) = shapes.split_last().ok_or_else(|| ort_err("no residuals"))?;
         Ok(ControlResiduals {
             down: down.iter().map(zeros).collect::<candle_core::Result<_>>()?,
-            mid: zeros(mid)?,
+            mid: Some(zeros(mid)?),
         })
     }
 
@@ -321,7 +321,7 @@ impl OrtDenoiser {
                 .iter()
                 .map(|t| t.to_dtype(dtype))
                 .collect::<candle_core::Result<_>>()?,
-            mid: mid.to_dtype(dtype)?,
+            mid: Some(mid.to_dtype(dtype)?),
         })
     }
 
@@ -358,7 +358,11 @@ impl OrtDenoiser {
         for (i, r) in residuals.down.iter().enumerate() {
             inputs.push(f32_input(&format!("down_block_res_{i}"), r)?);
         }
-        inputs.push(f32_input("mid_block_res", &residuals.mid)?);
+        let mid = residuals
+            .mid
+            .as_ref()
+            .ok_or_else(|| ort_err("the UNet graph needs the ControlNet's mid residual"))?;
+        inputs.push(f32_input("mid_block_res", mid)?);
         let out = self.unet.run(inputs)?;
         let eps = out
             .into_iter()

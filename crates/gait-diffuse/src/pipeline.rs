@@ -10,9 +10,10 @@ use candle_core::{DType, Device, Tensor};
 use crate::DiffuseError;
 use crate::controlnet::ControlResiduals;
 use crate::guidance::{Cutoffs, StepPlan};
+use crate::keep_region::Inpainting;
 use crate::models::DiffusionModels;
-use crate::modes::Inpainting;
 use crate::ort_models::OrtModels;
+use crate::savings::{LoopSavings, Savings};
 use crate::schedule::{Scheduler, SchedulerKind};
 use crate::tokenizer::ClipTokenizer;
 use crate::weights::{MERGES_FILE, Models};
@@ -28,6 +29,8 @@ pub struct DenoiseParams {
     pub scheduler: SchedulerKind,
     /// Steps without CFG or without the ControlNet (1, 0, 1: none).
     pub cutoffs: Cutoffs,
+    /// DeepCache and token merging (default: off).
+    pub savings: Savings,
 }
 
 /// SD 1.5 + ControlNet, loaded and ready to generate.
@@ -155,9 +158,15 @@ impl ControlnetPipeline {
         let mut sched = Scheduler::new(p.scheduler, p.steps);
         let timesteps = sched.timesteps().get(begin..).unwrap_or_default().to_vec();
         sched.set_begin_index(begin);
+        let mut savings = LoopSavings::new(&p.savings);
         for (i, &t) in timesteps.iter().enumerate() {
             let plan = p.cutoffs.step(i, timesteps.len(), guided);
-            let eps = self.predict_noise(&rows, &x, t as f64, plan, p)?;
+            let step = Step {
+                i,
+                t: t as f64,
+                plan,
+            };
+            let eps = self.predict_noise(&rows, &x, step, p, &mut savings)?;
             x = sched.step(&eps, &x)?;
             if let Some(Inpainting::Blend(k)) = inpaint {
                 x = k.blend(&sched, &x, timesteps.get(i + 1).copied())?;
@@ -195,33 +204,36 @@ impl ControlnetPipeline {
         Ok(())
     }
 
-    /// One step's noise prediction: ControlNet (when the plan runs it), UNet,
-    /// and the guidance mix (when the plan guides).
+    /// One step's noise prediction: ControlNet (when the plan runs it; its
+    /// shallow part on a DeepCache shallow step), UNet, and the guidance mix
+    /// (when the plan guides).
     fn predict_noise(
         &self,
         rows: &Rows,
         x: &Tensor,
-        t: f64,
-        plan: StepPlan,
+        step: Step,
         p: &DenoiseParams,
+        savings: &mut LoopSavings,
     ) -> Result<Tensor, DiffuseError> {
-        let (ctx, control, extra) = rows.get(plan.guided);
-        let input = per_guidance_row(x, plan.guided)?;
-        let res: Option<ControlResiduals> = if plan.controlnet {
-            Some(
+        let (ctx, control, extra) = rows.get(step.plan.guided);
+        let input = per_guidance_row(x, step.plan.guided)?;
+        let (t, scale) = (step.t, p.conditioning_scale);
+        let res: Option<ControlResiduals> = match (step.plan.controlnet, savings.shallow(step.i)) {
+            (false, _) => None,
+            (true, None) => Some(self.models.controlnet(&input, t, ctx, control, scale)?),
+            (true, Some(b)) => Some(
                 self.models
-                    .controlnet(&input, t, ctx, control, p.conditioning_scale)?,
-            )
-        } else {
-            None
+                    .controlnet_shallow(&input, t, ctx, control, scale, b)?,
+            ),
         };
-        let eps = match extra {
-            Some(e) => self
-                .models
-                .unet(&Tensor::cat(&[&input, e], 1)?, t, ctx, res.as_ref())?,
-            None => self.models.unet(&input, t, ctx, res.as_ref())?,
+        let unet_input = match extra {
+            Some(e) => Tensor::cat(&[&input, e], 1)?,
+            None => input,
         };
-        if !plan.guided {
+        let eps =
+            self.models
+                .unet_saving(&unet_input, t, ctx, res.as_ref(), savings.unet(step.i))?;
+        if !step.plan.guided {
             return Ok(eps);
         }
         let b = x.dim(0)?;
@@ -229,6 +241,14 @@ impl ControlnetPipeline {
         let c = eps.narrow(0, b, b)?;
         Ok((&u + ((c - &u)? * p.guidance_scale)?)?)
     }
+}
+
+/// One step of the loop: its index from the loop's first step, timestep and plan.
+#[derive(Debug, Clone, Copy)]
+struct Step {
+    i: usize,
+    t: f64,
+    plan: StepPlan,
 }
 
 /// The per-row inputs of the networks, with guidance (unconditional rows then

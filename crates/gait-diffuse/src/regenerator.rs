@@ -8,7 +8,8 @@ use gait_core::{
 
 use crate::config::ControlnetConfig;
 use crate::leg_mask::LegMask;
-use crate::modes::{INPAINT_UNET_CHANNELS, RegenMode};
+use crate::model_config::INPAINT_UNET_CHANNELS;
+use crate::modes::RegenMode;
 use crate::noise::NoiseRng;
 use crate::pipeline::{ControlnetPipeline, DenoiseParams};
 use crate::warp::{canvas_to_frame, edge_to_canvas, frame_to_canvas};
@@ -93,6 +94,7 @@ impl ControlnetRegenerator {
                 config.mode.name()
             )));
         }
+        pipeline.models.check_savings(&config.savings(0))?;
         let context = pipeline.context(
             &config.prompt,
             &config.negative_prompt,
@@ -108,12 +110,16 @@ impl ControlnetRegenerator {
 
     /// Initial latent noise for a frame (seed + index, or the shared seed).
     pub fn initial_noise(&self, index: usize, shape: (usize, usize, usize)) -> Vec<f32> {
-        let seed = if self.config.shared_noise {
+        NoiseRng::new(self.frame_seed(index)).normals(shape.0 * shape.1 * shape.2)
+    }
+
+    /// The seed of frame `index`: seed + index, or the shared seed.
+    fn frame_seed(&self, index: usize) -> u64 {
+        if self.config.shared_noise {
             self.config.seed
         } else {
             self.config.seed.wrapping_add(index as u64)
-        };
-        NoiseRng::new(seed).normals(shape.0 * shape.1 * shape.2)
+        }
     }
 
     /// Initial latent noise and the VAE sample's normals for a frame: one
@@ -170,6 +176,8 @@ impl ControlnetRegenerator {
             conditioning_scale: self.config.conditioning_scale,
             scheduler: self.config.scheduler,
             cutoffs: self.config.cutoffs(),
+            // A group's frames share one UNet call, so one stream of merge picks.
+            savings: self.config.savings(self.frame_seed(frames[0].index)),
         };
         let strength = self.config.strength();
         let images = match mode {

@@ -101,6 +101,7 @@ pub fn check_two_step_pipeline(label: &str, pipe: &gait_diffuse::ControlnetPipel
             conditioning_scale: 0.8,
             scheduler: kind,
             cutoffs: Default::default(),
+            savings: Default::default(),
         };
         let img = pipe
             .generate(&ctx, &control, &e["pipe.latents"], &p)
@@ -147,6 +148,7 @@ pub fn modes_params(kind: gait_diffuse::SchedulerKind) -> gait_diffuse::DenoiseP
         conditioning_scale: 0.8,
         scheduler: kind,
         cutoffs: Default::default(),
+        savings: Default::default(),
     }
 }
 
@@ -325,6 +327,7 @@ pub fn check_cutoffs(
                 control_start: f("control_guidance_start"),
                 control_end: f("control_guidance_end"),
             },
+            savings: Default::default(),
         };
         let strength = f("strength");
         let img = match c["mode"].as_str().unwrap() {

@@ -20,6 +20,7 @@ fn half_precision_pipelines_track_f32() {
         conditioning_scale: 0.8,
         scheduler: SchedulerKind::Unipc,
         cutoffs: Default::default(),
+        savings: Default::default(),
     };
     let reference = &e["pipe.unipc.image"];
     let (dtype, tol) = (DType::F16, 5e-2);

@@ -53,7 +53,12 @@ fn controlnet_residuals_and_unet_match_diffusers() {
             TOL,
         );
     }
-    assert_close("controlnet mid", &res.mid, &e["cn.mid"], TOL);
+    assert_close(
+        "controlnet mid",
+        res.mid.as_ref().unwrap(),
+        &e["cn.mid"],
+        TOL,
+    );
 
     let ucfg: UnetConfig = read_config(&tiny().join("unet")).unwrap();
     let unet = build_unet(

@@ -235,6 +235,7 @@ fn diffusers_config(s: &Scratch, b: &[u8]) {
         conditioning_scale: 1.0,
         scheduler: gait_diffuse::SchedulerKind::Ddim,
         cutoffs: Default::default(),
+        savings: Default::default(),
     };
     let _ = pipe.generate(&context, &control, &latents, &p);
 }

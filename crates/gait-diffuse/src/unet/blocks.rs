@@ -8,6 +8,7 @@ use candle_nn::VarBuilder;
 
 use super::conv::{Conv2d, conv2d};
 use super::resnet::{ResnetBlock2D, ResnetSpec};
+use super::token_merge::TokenMerge;
 use super::transformer::{Transformer2D, TransformerSpec};
 
 /// What the blocks of one UNet (or ControlNet) share.
@@ -111,26 +112,47 @@ impl DownBlock {
         x: &Tensor,
         temb: &Tensor,
         ctx: &Tensor,
+        merge: Option<&mut TokenMerge>,
+    ) -> Result<(Tensor, Vec<Tensor>)> {
+        let (x, mut states) = self.resnet_layers(x, temb, ctx, self.resnets.len(), merge)?;
+        let Some(d) = &self.downsample else {
+            return Ok((x, states));
+        };
+        let input = if self.pad_right {
+            x.pad_with_zeros(2, 0, 1)?.pad_with_zeros(3, 0, 1)?
+        } else {
+            x
+        };
+        let x = d.forward(&input)?;
+        states.push(x.clone());
+        Ok((x, states))
+    }
+
+    /// The first `layers` resnets (each with its transformer) and their
+    /// states: DeepCache's shallow branch stops inside a stage.
+    pub fn resnet_layers(
+        &self,
+        x: &Tensor,
+        temb: &Tensor,
+        ctx: &Tensor,
+        layers: usize,
+        mut merge: Option<&mut TokenMerge>,
     ) -> Result<(Tensor, Vec<Tensor>)> {
         let mut x = x.clone();
         let mut states = Vec::with_capacity(self.resnets.len() + 1);
-        for (i, r) in self.resnets.iter().enumerate() {
+        for (i, r) in self.resnets.iter().take(layers).enumerate() {
             x = r.forward(&x, Some(temb))?;
             if let Some(a) = self.attentions.get(i) {
-                x = a.forward(&x, ctx)?;
+                x = a.forward(&x, ctx, merge.as_deref_mut())?;
             }
             states.push(x.clone());
         }
-        if let Some(d) = &self.downsample {
-            let input = if self.pad_right {
-                x.pad_with_zeros(2, 0, 1)?.pad_with_zeros(3, 0, 1)?
-            } else {
-                x
-            };
-            x = d.forward(&input)?;
-            states.push(x.clone());
-        }
         Ok((x, states))
+    }
+
+    /// Resnets in the stage (DeepCache numbers its layers by them).
+    pub fn num_resnets(&self) -> usize {
+        self.resnets.len()
     }
 
     pub fn num_states(&self) -> usize {
@@ -163,10 +185,16 @@ impl MidBlock {
         })
     }
 
-    pub fn forward(&self, x: &Tensor, temb: &Tensor, ctx: &Tensor) -> Result<Tensor> {
+    pub fn forward(
+        &self,
+        x: &Tensor,
+        temb: &Tensor,
+        ctx: &Tensor,
+        mut merge: Option<&mut TokenMerge>,
+    ) -> Result<Tensor> {
         let mut x = self.first.forward(x, Some(temb))?;
         for (a, r) in &self.rest {
-            x = r.forward(&a.forward(&x, ctx)?, Some(temb))?;
+            x = r.forward(&a.forward(&x, ctx, merge.as_deref_mut())?, Some(temb))?;
         }
         Ok(x)
     }
@@ -224,31 +252,31 @@ impl UpBlock {
         self.resnets.len()
     }
 
-    /// Takes its skip states from the end of `skips`; upsamples to `size`
-    /// (the next stage's skip size) when given, else by 2.
-    pub fn forward(
+    /// Layer `i`: the resnet over (`x` ++ `skip`), then its transformer.
+    pub fn layer(
         &self,
+        i: usize,
         x: &Tensor,
-        skips: &mut Vec<Tensor>,
+        skip: &Tensor,
         temb: &Tensor,
         ctx: &Tensor,
-        size: Option<(usize, usize)>,
+        merge: Option<&mut TokenMerge>,
     ) -> Result<Tensor> {
-        let mut x = x.clone();
-        for (i, r) in self.resnets.iter().enumerate() {
-            let skip = skips.pop().ok_or_else(|| {
-                candle_core::Error::Msg("up block: skip connections exhausted".into())
-            })?;
-            x = r.forward(&Tensor::cat(&[&x, &skip], 1)?, Some(temb))?;
-            if let Some(a) = self.attentions.get(i) {
-                x = a.forward(&x, ctx)?;
-            }
+        let x = self.resnets[i].forward(&Tensor::cat(&[x, skip], 1)?, Some(temb))?;
+        match self.attentions.get(i) {
+            Some(a) => a.forward(&x, ctx, merge),
+            None => Ok(x),
         }
-        if let Some(u) = &self.upsample {
-            let (_, _, h, w) = x.dims4()?;
-            let (th, tw) = size.unwrap_or((2 * h, 2 * w));
-            x = u.forward(&x.upsample_nearest2d(th, tw)?)?;
-        }
-        Ok(x)
+    }
+
+    /// Upsamples to `size` (the next stage's skip size) when given, else by
+    /// 2; the last stage has no upsampler and hands `x` on.
+    pub fn upsample(&self, x: Tensor, size: Option<(usize, usize)>) -> Result<Tensor> {
+        let Some(u) = &self.upsample else {
+            return Ok(x);
+        };
+        let (_, _, h, w) = x.dims4()?;
+        let (th, tw) = size.unwrap_or((2 * h, 2 * w));
+        u.forward(&x.upsample_nearest2d(th, tw)?)
     }
 }

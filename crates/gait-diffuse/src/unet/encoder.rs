@@ -5,7 +5,9 @@ use candle_core::{Result, Tensor};
 use candle_nn::VarBuilder;
 
 use super::blocks::{BlockCommon, DownBlock, MidBlock};
+use super::deep_cache::CacheBranch;
 use super::embeddings::{TimestepEmbedding, Timesteps};
+use super::token_merge::TokenMerge;
 use crate::model_config::UnetConfig;
 
 /// One down stage of the config: output channels and, for cross-attention
@@ -122,19 +124,70 @@ impl Encoder {
 
     /// Runs the down stages from `x` (after `conv_in`); returns the input to
     /// the mid block and the skip states (`x` first).
-    pub fn down(&self, x: Tensor, temb: &Tensor, ctx: &Tensor) -> Result<(Tensor, Vec<Tensor>)> {
+    pub fn down(
+        &self,
+        x: Tensor,
+        temb: &Tensor,
+        ctx: &Tensor,
+        mut merge: Option<&mut TokenMerge>,
+    ) -> Result<(Tensor, Vec<Tensor>)> {
         let mut states = vec![x.clone()];
         let mut x = x;
         for block in &self.down {
-            let (next, s) = block.forward(&x, temb, ctx)?;
+            let (next, s) = block.forward(&x, temb, ctx, merge.as_deref_mut())?;
             states.extend(s);
             x = next;
         }
         Ok((x, states))
     }
 
-    pub fn mid(&self, x: &Tensor, temb: &Tensor, ctx: &Tensor) -> Result<Tensor> {
-        self.mid.forward(x, temb, ctx)
+    /// The skip states DeepCache's shallow branch (`branch`) recomputes:
+    /// `conv_in`'s, every stage's above `branch.block`, and that stage's
+    /// first `branch.layer` resnets; the [`Self::shallow_states`] first
+    /// states of [`Self::down`].
+    pub fn down_shallow(
+        &self,
+        x: Tensor,
+        temb: &Tensor,
+        ctx: &Tensor,
+        branch: CacheBranch,
+        mut merge: Option<&mut TokenMerge>,
+    ) -> Result<Vec<Tensor>> {
+        let mut states = vec![x.clone()];
+        let mut x = x;
+        for block in &self.down[..branch.block] {
+            let (next, s) = block.forward(&x, temb, ctx, merge.as_deref_mut())?;
+            states.extend(s);
+            x = next;
+        }
+        let stage = &self.down[branch.block];
+        let layers = branch.layer.min(stage.num_resnets());
+        states.extend(stage.resnet_layers(&x, temb, ctx, layers, merge)?.1);
+        Ok(states)
+    }
+
+    /// How many skip states [`Self::down_shallow`] gives.
+    pub fn shallow_states(&self, branch: CacheBranch) -> usize {
+        let above: usize = self.down[..branch.block]
+            .iter()
+            .map(DownBlock::num_states)
+            .sum();
+        1 + above + branch.layer.min(self.down[branch.block].num_resnets())
+    }
+
+    /// Down stages (DeepCache's branch blocks).
+    pub fn num_stages(&self) -> usize {
+        self.down.len()
+    }
+
+    pub fn mid(
+        &self,
+        x: &Tensor,
+        temb: &Tensor,
+        ctx: &Tensor,
+        merge: Option<&mut TokenMerge>,
+    ) -> Result<Tensor> {
+        self.mid.forward(x, temb, ctx, merge)
     }
 
     /// Skip states the down path hands out (`conv_in`'s output included).

@@ -12,6 +12,7 @@ use super::conv::{Conv2d, conv2d};
 use super::feed_forward::FeedForward;
 use super::linear::{Linear, linear};
 use super::norm::{GroupNorm, group_norm};
+use super::token_merge::TokenMerge;
 
 /// One transformer layer (`transformer_blocks.{i}`).
 #[derive(Debug, Clone)]
@@ -37,8 +38,23 @@ impl BasicTransformerBlock {
         })
     }
 
-    fn forward(&self, x: &Tensor, context: &Tensor) -> Result<Tensor> {
-        let x = (self.attn1.forward(&self.norm1.forward(x)?, None)? + x)?;
+    /// `merge` (token merging) applies to self-attention only, as tomesd's default.
+    fn forward(
+        &self,
+        x: &Tensor,
+        context: &Tensor,
+        merge: Option<&mut TokenMerge>,
+    ) -> Result<Tensor> {
+        let plan = match merge {
+            Some(m) => m.plan(x)?,
+            None => None,
+        };
+        let y = self.norm1.forward(x)?;
+        let y = match &plan {
+            Some(p) => p.unmerge(&self.attn1.forward(&p.merge(&y)?, None)?)?,
+            None => self.attn1.forward(&y, None)?,
+        };
+        let x = (y + x)?;
         let x = (self
             .attn2
             .forward(&self.norm2.forward(&x)?, Some(context))?
@@ -104,7 +120,14 @@ impl Transformer2D {
         })
     }
 
-    pub fn forward(&self, x: &Tensor, context: &Tensor) -> Result<Tensor> {
+    /// The transformer layers over `x`'s pixels; `merge` merges tokens at the
+    /// full latent resolution.
+    pub fn forward(
+        &self,
+        x: &Tensor,
+        context: &Tensor,
+        mut merge: Option<&mut TokenMerge>,
+    ) -> Result<Tensor> {
         let (b, c, h, w) = x.dims4()?;
         let y = self.norm.forward(x, false)?;
         let to_tokens = |t: Tensor| t.permute((0, 2, 3, 1))?.reshape((b, h * w, c));
@@ -113,7 +136,7 @@ impl Transformer2D {
             Projection::Linear(p) => p.forward(&to_tokens(y)?)?,
         };
         for block in &self.blocks {
-            t = block.forward(&t, context)?;
+            t = block.forward(&t, context, merge.as_deref_mut())?;
         }
         let to_map = |t: Tensor| t.reshape((b, h, w, c))?.permute((0, 3, 1, 2));
         match &self.proj_out {
