@@ -9,6 +9,7 @@ mod backend;
 #[cfg(feature = "candle")]
 pub mod checkpoint;
 mod context;
+mod crop;
 mod device;
 pub mod dlc;
 mod edge;
@@ -25,6 +26,7 @@ mod stage;
 
 pub use backend::Backend;
 pub use context::StageContext;
+pub use crop::{CropSpec, SubjectCrop};
 pub use device::{Device, NoCudaSupport};
 pub use edge::EdgeMap;
 pub use error::StageError;

@@ -39,6 +39,29 @@ pub trait ImageRegenerator: Send {
     fn take_warnings(&mut self) -> Vec<String> {
         Vec::new()
     }
+
+    /// True when a frame's result depends on the frame before it (e.g. a
+    /// start from the previous frame's latent): the runner then hands the
+    /// frames one by one, in order, and keeps [`Self::state`] with each.
+    fn is_stateful(&self) -> bool {
+        false
+    }
+
+    /// Forgets the previous frame: the next frame starts afresh.
+    fn reset(&mut self) {}
+
+    /// What the next frame carries over from the last one, saved with it so
+    /// that a resumed run goes on as if it had not stopped.
+    fn state(&self) -> Option<Vec<u8>> {
+        None
+    }
+
+    /// Restores a state returned by [`Self::state`]; `false` when the bytes
+    /// are not understood (the runner then calls [`Self::reset`]).
+    fn restore(&mut self, state: &[u8]) -> bool {
+        let _ = state;
+        false
+    }
 }
 
 /// Finds one person's keypoints per frame.

@@ -6,9 +6,14 @@
 //! Usage: regen_bench SD_DIR CONTROLNET_DIR EDGES_DIR [key=value ...]
 //! keys: device (cpu | cuda | cuda:N), dtype (f32 | f16 | bf16), steps,
 //! batch, frames (timed), warmup (untimed), scheduler (unipc | ddim | dpmpp2m),
-//! guidance_end, control_guidance_start, control_guidance_end.
+//! guidance_end, control_guidance_start, control_guidance_end, cache_interval,
+//! cache_branch, token_merge_ratio (issue 30's savings), width (crop each edge
+//! map to its middle `width` columns: the subject crop's canvas, e.g. 256 of
+//! 512), init (noise | previous: frames one by one, each from the last one's
+//! latent) and strength (init = previous).
 //! EDGES_DIR holds square grayscale PNG edge maps (white edges on black);
-//! frame i uses the (i mod n)-th. Prints one JSON line.
+//! frame i uses the (i mod n)-th. Prints one JSON line; with init = previous
+//! `first_s` is the first frame's time and `median_s` that of the others.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -21,7 +26,8 @@ type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
 const USAGE: &str = "usage: regen_bench SD_DIR CONTROLNET_DIR EDGES_DIR [device=cuda] [dtype=f16] \
                      [steps=20] [batch=1] [frames=8] [warmup=1] [scheduler=unipc] [guidance_end=1] \
-                     [control_guidance_start=0] [control_guidance_end=1]";
+                     [control_guidance_start=0] [control_guidance_end=1] [cache_interval=1] \
+                     [cache_branch=0] [token_merge_ratio=0] [width=SIZE] [init=noise] [strength=0.5]";
 
 fn main() {
     if let Err(e) = run() {
@@ -46,6 +52,12 @@ fn run() -> Res<()> {
         ("guidance_end", "1.0"),
         ("control_guidance_start", "0.0"),
         ("control_guidance_end", "1.0"),
+        ("cache_interval", "1"),
+        ("cache_branch", "0"),
+        ("token_merge_ratio", "0.0"),
+        ("width", "0"),
+        ("init", "noise"),
+        ("strength", "0.5"),
     ]
     .into_iter()
     .map(|(k, v)| (k.to_string(), v.to_string()))
@@ -65,20 +77,40 @@ fn run() -> Res<()> {
         (num("steps")?, num("batch")?, num("frames")?, num("warmup")?);
     let edges = read_edges(Path::new(&args[2]))?;
     let size = edges[0].width();
+    let width = match num("width")? {
+        0 => size,
+        w => w as u32,
+    };
+    let edges: Vec<image::GrayImage> = edges.iter().map(|e| middle_columns(e, width)).collect();
+    let previous = opts["init"] == "previous";
+    // Each frame starts from the last: one at a time, and the first is not like the others.
+    let batch = if previous { 1 } else { batch };
 
     // Everything else (prompts, guidance 7.5, conditioning scale 1, seeds)
     // stays at the regenerator's defaults, the paper's settings.
     let config: ControlnetConfig = toml_config(&format!(
         "sd_path = {:?}\ncontrolnet_path = {:?}\ndtype = {:?}\nsteps = {steps}\nbatch = {batch}\n\
-         resolution = {size}\nscheduler = {:?}\nguidance_end = {}\ncontrol_guidance_start = {}\n\
-         control_guidance_end = {}\n",
+         resolution = {}\nscheduler = {:?}\nguidance_end = {}\ncontrol_guidance_start = {}\n\
+         control_guidance_end = {}\ncache_interval = {}\ncache_branch = {}\ntoken_merge_ratio = {}\n\
+         region = {:?}\ncrop_size = [{width}, {size}]\ninit = {:?}\n{}",
         abs(&args[0])?,
         abs(&args[1])?,
         opts["dtype"],
+        width.min(size),
         opts["scheduler"],
         opts["guidance_end"],
         opts["control_guidance_start"],
         opts["control_guidance_end"],
+        opts["cache_interval"],
+        opts["cache_branch"],
+        opts["token_merge_ratio"],
+        if width == size { "frame" } else { "subject" },
+        opts["init"],
+        if previous {
+            format!("strength = {}\n", opts["strength"])
+        } else {
+            String::new()
+        },
     ))?;
     let ctx = StageContext::new(".").on(device);
     let t0 = Instant::now();
@@ -98,7 +130,7 @@ fn run() -> Res<()> {
                     EdgeMap {
                         index,
                         image: e.clone(),
-                        resize: Resize::identity(size, size),
+                        resize: Resize::identity(width, size),
                     },
                 )
             })
@@ -114,24 +146,43 @@ fn run() -> Res<()> {
         }
     }
     per_frame.truncate(frames);
-    let mut sorted = per_frame.clone();
+    // With init = previous the first frame starts from noise: timed apart.
+    let first = per_frame[0];
+    let steady = if previous && per_frame.len() > 1 {
+        &per_frame[1..]
+    } else {
+        &per_frame[..]
+    };
+    let mut sorted = steady.to_vec();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2];
     println!(
         "{{\"impl\": \"gait\", \"device\": \"{device}\", \"dtype\": {:?}, \"steps\": {steps}, \"batch\": {batch}, \
          \"scheduler\": {:?}, \"guidance_end\": {}, \"control_guidance\": [{}, {}], \
-         \"size\": {size}, \"load_s\": {load_s:.3}, \"median_s\": {median:.4}, \"per_frame_s\": {:?}}}",
+         \"size\": {size}, \"width\": {width}, \"cache_interval\": {}, \"cache_branch\": {}, \
+         \"token_merge_ratio\": {}, \"init\": {:?}, \"load_s\": {load_s:.3}, \"first_s\": {first:.4}, \
+         \"median_s\": {median:.4}, \"per_frame_s\": {:?}}}",
         opts["dtype"],
         opts["scheduler"],
         opts["guidance_end"],
         opts["control_guidance_start"],
         opts["control_guidance_end"],
+        opts["cache_interval"],
+        opts["cache_branch"],
+        opts["token_merge_ratio"],
+        opts["init"],
         per_frame
             .iter()
             .map(|s| (s * 1e4).round() / 1e4)
             .collect::<Vec<_>>()
     );
     Ok(())
+}
+
+/// The middle `width` columns of a square edge map (all of it when `width` is its size).
+fn middle_columns(e: &image::GrayImage, width: u32) -> image::GrayImage {
+    let x0 = (e.width().saturating_sub(width)) / 2;
+    image::imageops::crop_imm(e, x0, 0, width.min(e.width()), e.height()).to_image()
 }
 
 fn toml_config(text: &str) -> Res<ControlnetConfig> {

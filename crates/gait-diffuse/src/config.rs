@@ -104,7 +104,43 @@ pub struct ControlnetConfig {
     pub strength: Option<f64>,
     /// `inpaint`: how the leg mask is drawn from the original frame's pose.
     pub mask: LegMaskConfig,
+    /// `frame` (the whole frame at `resolution`) or `subject`: a crop around
+    /// the subject of the subject pass, `crop_size` canvas pixels, pasted back.
+    pub region: Region,
+    /// `region = "subject"`: the crop's width and height in canvas pixels
+    /// (multiples of 64, at most 1024; a walker is about twice as tall as wide).
+    pub crop_size: [u32; 2],
+    /// `region = "subject"`: extra height around the body box, as a fraction.
+    pub crop_margin: f64,
+    /// `noise` (every frame from its own noise, or its frame in img2img) or
+    /// `previous`: from the previous frame's final latent noised to `strength`
+    /// (this project's addition; the first frame of a run and any frame after
+    /// a skipped one start as with `noise`).
+    pub init: Init,
 }
+
+/// What the regenerator redraws (`region = "..."`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Region {
+    #[default]
+    Frame,
+    Subject,
+}
+
+/// Where a frame's denoising starts (`init = "..."`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Init {
+    #[default]
+    Noise,
+    Previous,
+}
+
+/// Largest crop side, canvas pixels.
+pub const MAX_CROP_SIDE: u32 = 1024;
+/// The strength of `init = "previous"` when none is set.
+pub const PREVIOUS_STRENGTH: f64 = 0.5;
 
 impl Default for ControlnetConfig {
     fn default() -> Self {
@@ -133,6 +169,10 @@ impl Default for ControlnetConfig {
             mode: RegenMode::Text2img,
             strength: None,
             mask: LegMaskConfig::default(),
+            region: Region::Frame,
+            crop_size: [256, 512],
+            crop_margin: 0.15,
+            init: Init::Noise,
         }
     }
 }
@@ -159,12 +199,15 @@ impl ControlnetConfig {
         }
         if let Some(s) = self.strength
             && !self.mode.uses_frame()
+            && self.init == Init::Noise
         {
             return Err(format!(
-                "regenerator.strength = {s} needs mode = \"img2img\" or \"inpaint\" (mode is \"{}\")",
+                "regenerator.strength = {s} needs mode = \"img2img\" or \"inpaint\", or init = \"previous\" (mode is \"{}\")",
                 self.mode.name()
             ));
         }
+        self.validate_crop()?;
+        self.validate_init()?;
         if self.mode.uses_frame() {
             begin_step(self.steps, self.strength()).map_err(|e| e.to_string())?;
         }
@@ -172,6 +215,52 @@ impl ControlnetConfig {
             self.mask.validate()?;
         }
         Ok(())
+    }
+
+    /// `crop_size` and `crop_margin`, when the region is the subject.
+    fn validate_crop(&self) -> Result<(), String> {
+        if self.region != Region::Subject {
+            return Ok(());
+        }
+        for side in self.crop_size {
+            if side == 0 || !side.is_multiple_of(64) || side > MAX_CROP_SIDE {
+                return Err(format!(
+                    "regenerator.crop_size = {:?}: each side must be a multiple of 64 from 64 to {MAX_CROP_SIDE}",
+                    self.crop_size
+                ));
+            }
+        }
+        if !(0.0..=2.0).contains(&self.crop_margin) {
+            return Err(format!(
+                "regenerator.crop_margin = {} must be in [0, 2]",
+                self.crop_margin
+            ));
+        }
+        Ok(())
+    }
+
+    /// `init = "previous"`: its strength leaves a step to run, and no inpainting.
+    fn validate_init(&self) -> Result<(), String> {
+        if self.init != Init::Previous {
+            return Ok(());
+        }
+        if self.mode == RegenMode::Inpaint {
+            return Err(
+                "regenerator.init = \"previous\" cannot be used with mode = \"inpaint\" \
+                 (the leg mask is redrawn from noise); use mode = \"text2img\" or \"img2img\""
+                    .into(),
+            );
+        }
+        begin_step(self.steps, self.strength()).map_err(|e| e.to_string())?;
+        Ok(())
+    }
+
+    /// The subject crop, when the region is the subject.
+    pub fn subject_crop(&self) -> Option<gait_core::CropSpec> {
+        (self.region == Region::Subject).then_some(gait_core::CropSpec {
+            size: self.crop_size,
+            margin: self.crop_margin,
+        })
     }
 
     /// The guidance and ControlNet cut-offs.
@@ -196,6 +285,9 @@ impl ControlnetConfig {
     /// The strength in use: the configured one or the mode's default.
     pub fn strength(&self) -> f64 {
         self.strength
-            .unwrap_or_else(|| self.mode.default_strength())
+            .unwrap_or_else(|| match (self.init, self.mode) {
+                (Init::Previous, RegenMode::Text2img) => PREVIOUS_STRENGTH,
+                _ => self.mode.default_strength(),
+            })
     }
 }

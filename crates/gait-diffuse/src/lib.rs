@@ -18,6 +18,7 @@ mod noise;
 pub mod ort_models;
 mod passthrough;
 mod pipeline;
+mod previous;
 mod regenerator;
 mod savings;
 mod schedule;
@@ -31,7 +32,9 @@ pub mod weights;
 use std::path::PathBuf;
 
 pub use clip_text::ClipTextModel;
-pub use config::{ControlnetConfig, Dtype, PAPER_NEGATIVE_PROMPT, PAPER_PROMPT};
+pub use config::{
+    ControlnetConfig, Dtype, Init, MAX_CROP_SIDE, PAPER_NEGATIVE_PROMPT, PAPER_PROMPT, Region,
+};
 pub use controlnet::{ControlNet, ControlResiduals};
 pub use error::DiffuseError;
 use gait_core::{ImageRegenerator, StageContext, StageError};
@@ -44,7 +47,7 @@ pub use modes::{RegenMode, begin_step};
 pub use noise::NoiseRng;
 pub use ort_models::{OrtDenoiser, OrtModels};
 pub use passthrough::Passthrough;
-pub use pipeline::{ControlnetPipeline, DenoiseParams};
+pub use pipeline::{ControlnetPipeline, DenoiseParams, Generated};
 pub use regenerator::{ControlnetRegenerator, canvas_for};
 pub use savings::{MAX_CACHE_BRANCH, MAX_MERGE_RATIO, Savings};
 pub use schedule::{Scheduler, SchedulerKind};
@@ -89,6 +92,15 @@ impl RegeneratorConfig {
     /// original frames first and calls `ImageRegenerator::regenerate_with_poses`.
     pub fn needs_poses(&self) -> bool {
         matches!(self, RegeneratorConfig::Controlnet(c) if c.mode == RegenMode::Inpaint)
+    }
+
+    /// The crop around the subject the regenerator redraws, when its region
+    /// is the subject (the runner cuts and pastes it).
+    pub fn subject_crop(&self) -> Option<gait_core::CropSpec> {
+        match self {
+            RegeneratorConfig::Controlnet(c) => c.subject_crop(),
+            _ => None,
+        }
     }
 
     /// True when the regenerator hands frames on unchanged, so the runner need

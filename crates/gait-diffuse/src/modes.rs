@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::DiffuseError;
 use crate::keep_region::{Inpainting, KeepRegion, latent_mask};
 use crate::model_config::INPAINT_UNET_CHANNELS;
-use crate::pipeline::{ControlnetPipeline, DenoiseParams};
+use crate::pipeline::{ControlnetPipeline, DenoiseParams, Generated};
 use crate::schedule::Scheduler;
 use crate::tokenizer::ClipTokenizer;
 use crate::weights::{MERGES_FILE, Models};
@@ -115,15 +115,25 @@ impl ControlnetPipeline {
         strength: f64,
         p: &DenoiseParams,
     ) -> Result<Tensor, DiffuseError> {
-        let begin = begin_step(p.steps, strength)?;
+        Ok(self
+            .img2img_full(context, control, images, eps, noise, strength, p)?
+            .images)
+    }
+
+    /// As [`Self::img2img`], keeping the final latents too.
+    #[allow(clippy::too_many_arguments)]
+    pub fn img2img_full(
+        &self,
+        context: &Tensor,
+        control: &Tensor,
+        images: &Tensor,
+        eps: &Tensor,
+        noise: &Tensor,
+        strength: f64,
+        p: &DenoiseParams,
+    ) -> Result<Generated, DiffuseError> {
         let latents = self.encode_latents(images, eps)?;
-        let sched = Scheduler::new(p.scheduler, p.steps);
-        let x = sched.add_noise(
-            &latents,
-            &noise.to_dtype(self.dtype)?,
-            sched.timesteps()[begin],
-        )?;
-        self.denoise(context, control, &x, p, begin, None)
+        self.from_latents(context, control, &latents, noise, strength, p)
     }
 
     /// Inpainting: as [`Self::img2img`], but only where `mask` `(B, 1, H, W)`
@@ -174,7 +184,9 @@ impl ControlnetPipeline {
                 mask: lmask,
             })
         };
-        self.denoise(context, control, &x, p, begin, Some(&how))
+        Ok(self
+            .denoise(context, control, &x, p, begin, Some(&how))?
+            .images)
     }
 }
 

@@ -33,6 +33,15 @@ pub struct DenoiseParams {
     pub savings: Savings,
 }
 
+/// What a denoising loop gives: images `(B, 3, H, W)` in [0, 1] (f32) and
+/// the final latents `(B, 4, h, w)` they were decoded from, in the loop's
+/// (scaled) space, as diffusers' `output_type="latent"`.
+#[derive(Debug, Clone)]
+pub struct Generated {
+    pub images: Tensor,
+    pub latents: Tensor,
+}
+
 /// SD 1.5 + ControlNet, loaded and ready to generate.
 pub struct ControlnetPipeline {
     pub models: Box<dyn DiffusionModels>,
@@ -128,6 +137,17 @@ impl ControlnetPipeline {
         latents: &Tensor,
         p: &DenoiseParams,
     ) -> Result<Tensor, DiffuseError> {
+        Ok(self.denoise(context, control, latents, p, 0, None)?.images)
+    }
+
+    /// As [`Self::generate`], keeping the final latents too.
+    pub fn generate_full(
+        &self,
+        context: &Tensor,
+        control: &Tensor,
+        latents: &Tensor,
+        p: &DenoiseParams,
+    ) -> Result<Generated, DiffuseError> {
         self.denoise(context, control, latents, p, 0, None)
     }
 
@@ -142,7 +162,7 @@ impl ControlnetPipeline {
         p: &DenoiseParams,
         begin: usize,
         inpaint: Option<&Inpainting>,
-    ) -> Result<Tensor, DiffuseError> {
+    ) -> Result<Generated, DiffuseError> {
         let b = latents.dim(0)?;
         let guided = p.guidance_scale > 1.0;
         let extra = match inpaint {
@@ -172,9 +192,13 @@ impl ControlnetPipeline {
                 x = k.blend(&sched, &x, timesteps.get(i + 1).copied())?;
             }
         }
-        let x = (x / self.models.vae_config().scaling_factor)?;
-        let img = self.models.decode(&x)?;
-        Ok(((img.to_dtype(DType::F32)? / 2.0)? + 0.5)?.clamp(0f32, 1f32)?)
+        let img = self
+            .models
+            .decode(&(&x / self.models.vae_config().scaling_factor)?)?;
+        Ok(Generated {
+            images: ((img.to_dtype(DType::F32)? / 2.0)? + 0.5)?.clamp(0f32, 1f32)?,
+            latents: x,
+        })
     }
 
     /// The UNet's input channels and the context's rows fit this run.

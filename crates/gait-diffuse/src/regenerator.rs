@@ -6,14 +6,14 @@ use gait_core::{
     Backend, EdgeMap, Frame, ImageRegenerator, Pose, Resize, StageContext, StageError,
 };
 
-use crate::config::ControlnetConfig;
+use crate::config::{ControlnetConfig, Init, Region};
 use crate::leg_mask::LegMask;
 use crate::model_config::INPAINT_UNET_CHANNELS;
 use crate::modes::RegenMode;
 use crate::noise::NoiseRng;
 use crate::pipeline::{ControlnetPipeline, DenoiseParams};
 use crate::warp::{canvas_to_frame, edge_to_canvas, frame_to_canvas};
-use crate::{DiffuseError, ort_models, weights};
+use crate::{DiffuseError, ort_models, previous, weights};
 
 /// Regenerates each frame from its edge map with SD 1.5 + ControlNet.
 pub struct ControlnetRegenerator {
@@ -22,6 +22,8 @@ pub struct ControlnetRegenerator {
     config: ControlnetConfig,
     /// Notes for run.json, handed out by `take_warnings`.
     warnings: Vec<String>,
+    /// `init = "previous"`: the last frame's final latent `(1, 4, h, w)`.
+    previous: Option<Tensor>,
 }
 
 impl ControlnetRegenerator {
@@ -105,6 +107,7 @@ impl ControlnetRegenerator {
             context,
             config: config.clone(),
             warnings: Vec::new(),
+            previous: None,
         })
     }
 
@@ -131,13 +134,17 @@ impl ControlnetRegenerator {
         (v, eps)
     }
 
+    /// Redraws a group of frames of one canvas size; `start` (one frame
+    /// only) is the previous frame's latent to start from. Returns the frames
+    /// and the final latents (none for inpainting).
     fn run_group(
         &self,
         frames: &[&Frame],
         edges: &[&EdgeMap],
         masks: &[Option<&LegMask>],
         canvas: &Resize,
-    ) -> Result<Vec<Frame>, DiffuseError> {
+        start: Option<&Tensor>,
+    ) -> Result<(Vec<Frame>, Option<Tensor>), DiffuseError> {
         let (w, h) = (canvas.dst_width as usize, canvas.dst_height as usize);
         let s = self.pipeline.vae_scale();
         let (lh, lw) = (h / s, w / s);
@@ -180,30 +187,43 @@ impl ControlnetRegenerator {
             savings: self.config.savings(self.frame_seed(frames[0].index)),
         };
         let strength = self.config.strength();
-        let images = match mode {
-            RegenMode::Text2img => {
-                self.pipeline
-                    .generate(&self.context, &control, &latents, &params)?
+        let (images, eps) = if mode.uses_frame() {
+            (
+                Tensor::from_vec(images, (n, 3, h, w), dev)?,
+                Tensor::from_vec(eps, (n, 4, lh, lw), dev)?,
+            )
+        } else {
+            (latents.clone(), latents.clone())
+        };
+        let pipe = &self.pipeline;
+        let ctx = &self.context;
+        let out = match (mode, start) {
+            (_, Some(prev)) => {
+                Some(pipe.from_latents(ctx, &control, prev, &latents, strength, &params)?)
             }
-            RegenMode::Img2img => self.pipeline.img2img(
-                &self.context,
-                &control,
-                &Tensor::from_vec(images, (n, 3, h, w), dev)?,
-                &Tensor::from_vec(eps, (n, 4, lh, lw), dev)?,
-                &latents,
-                strength,
-                &params,
-            )?,
-            RegenMode::Inpaint => self.pipeline.inpaint(
-                &self.context,
-                &control,
-                &Tensor::from_vec(images, (n, 3, h, w), dev)?,
-                &Tensor::from_vec(mask_px, (n, 1, h, w), dev)?,
-                &Tensor::from_vec(eps, (n, 4, lh, lw), dev)?,
-                &latents,
-                strength,
-                &params,
-            )?,
+            (RegenMode::Text2img, None) => {
+                Some(pipe.generate_full(ctx, &control, &latents, &params)?)
+            }
+            (RegenMode::Img2img, None) => {
+                Some(pipe.img2img_full(ctx, &control, &images, &eps, &latents, strength, &params)?)
+            }
+            (RegenMode::Inpaint, None) => None,
+        };
+        let (images, last) = match out {
+            Some(g) => (g.images, Some(g.latents)),
+            None => (
+                pipe.inpaint(
+                    ctx,
+                    &control,
+                    &images,
+                    &Tensor::from_vec(mask_px, (n, 1, h, w), dev)?,
+                    &eps,
+                    &latents,
+                    strength,
+                    &params,
+                )?,
+                None,
+            ),
         };
         frames
             .iter()
@@ -216,7 +236,8 @@ impl ControlnetRegenerator {
                 }
                 Ok(Frame::new(f.index, img))
             })
-            .collect()
+            .collect::<Result<Vec<_>, DiffuseError>>()
+            .map(|frames| (frames, last))
     }
 
     /// Runs the frames whose `masks` entry is not `None` (all of them
@@ -251,11 +272,11 @@ impl ControlnetRegenerator {
                 i += 1;
                 continue;
             }
-            let canvas = canvas_for(&frames[i], self.config.resolution);
+            let canvas = self.canvas(&frames[i])?;
             let mut j = i + 1;
             while j < frames.len()
-                && j - i < self.config.batch
-                && canvas_for(&frames[j], self.config.resolution) == canvas
+                && j - i < self.batch()
+                && self.canvas(&frames[j])? == canvas
                 && !(inpaint && masks.get(j).is_none_or(Option::is_none))
             {
                 j += 1;
@@ -265,7 +286,12 @@ impl ControlnetRegenerator {
             let ms: Vec<Option<&LegMask>> = (i..j)
                 .map(|k| masks.get(k).and_then(Option::as_ref))
                 .collect();
-            out.extend(self.run_group(&fs, &es, &ms, &canvas)?);
+            let start = self.start_latent(&canvas);
+            let (redrawn, last) = self.run_group(&fs, &es, &ms, &canvas, start.as_ref())?;
+            if self.is_stateful() {
+                self.previous = last;
+            }
+            out.extend(redrawn);
             i = j;
         }
         Ok(out)
@@ -313,6 +339,80 @@ impl ImageRegenerator for ControlnetRegenerator {
 
     fn take_warnings(&mut self) -> Vec<String> {
         std::mem::take(&mut self.warnings)
+    }
+
+    fn is_stateful(&self) -> bool {
+        self.config.init == Init::Previous
+    }
+
+    fn reset(&mut self) {
+        self.previous = None;
+    }
+
+    fn state(&self) -> Option<Vec<u8>> {
+        if !self.is_stateful() {
+            return None;
+        }
+        // An empty state: the next frame starts afresh (inpainting, or none yet).
+        Some(match &self.previous {
+            Some(p) => previous::to_state(p).ok()?,
+            None => Vec::new(),
+        })
+    }
+
+    fn restore(&mut self, state: &[u8]) -> bool {
+        if state.is_empty() {
+            self.previous = None;
+            return true;
+        }
+        match previous::from_state(state) {
+            Some(t) => {
+                self.previous = t.to_device(&self.pipeline.device).ok();
+                self.previous.is_some()
+            }
+            None => false,
+        }
+    }
+}
+
+impl ControlnetRegenerator {
+    /// The generation canvas of a frame: the frame itself when it is a crop
+    /// around the subject (cut at the canvas size), else short side `resolution`.
+    fn canvas(&self, frame: &Frame) -> Result<Resize, StageError> {
+        if self.config.region != Region::Subject {
+            return Ok(canvas_for(frame, self.config.resolution));
+        }
+        let (w, h) = frame.image.dimensions();
+        if !(w.is_multiple_of(64) && h.is_multiple_of(64)) || w == 0 || h == 0 {
+            return Err(StageError::BadInput(format!(
+                "region = \"subject\": frame {} is {w}x{h}, not a crop of multiples of 64 \
+                 (the runner cuts crops at crop_size)",
+                frame.index
+            )));
+        }
+        Ok(Resize::identity(w, h))
+    }
+
+    /// Frames per network call: one at a time when each starts from the last.
+    fn batch(&self) -> usize {
+        if self.is_stateful() {
+            1
+        } else {
+            self.config.batch
+        }
+    }
+
+    /// The previous frame's latent, when this frame starts from it (same canvas).
+    fn start_latent(&self, canvas: &Resize) -> Option<Tensor> {
+        let s = self.pipeline.vae_scale();
+        let want = (
+            canvas.dst_height as usize / s,
+            canvas.dst_width as usize / s,
+        );
+        self.previous
+            .as_ref()
+            .filter(|p| p.dims4().is_ok_and(|(_, _, h, w)| (h, w) == want))
+            .cloned()
     }
 }
 

@@ -208,6 +208,12 @@ impl PipelineConfig {
         self.report.load_normative().map_err(|e| {
             PipelineError::config(origin, format!("[report] {}", one_line(&e.to_string())))
         })?;
+        if self.regenerator.subject_crop().is_some() && !self.subject.enabled {
+            return Err(PipelineError::config(
+                origin,
+                "[regenerator] region = \"subject\" needs the subject pass; set subject.enabled = true or region = \"frame\"",
+            ));
+        }
         if self.regenerator.needs_edges() && matches!(self.edge, EdgeConfig::None) {
             return Err(PipelineError::config(
                 origin,

@@ -79,10 +79,12 @@ pub(crate) struct Driver<'a> {
     /// Where the subject is in each frame; frames without it get an empty
     /// pose and skip every stage. `None`: no subject tracking.
     pub(crate) subject: Option<&'a BTreeMap<usize, PersonBox>>,
+    /// The frame a stateful regenerator redrew last (its state follows it).
+    pub(crate) last_regenerated: Option<usize>,
 }
 
 impl Driver<'_> {
-    fn record(&mut self, stage: &str) -> &mut StageRecord {
+    pub(crate) fn record(&mut self, stage: &str) -> &mut StageRecord {
         self.records.entry(stage.to_string()).or_default()
     }
 
@@ -233,41 +235,10 @@ impl Driver<'_> {
         if todo.is_empty() {
             return Ok(out.into_iter().flatten().collect());
         }
-        let edges = self.edges(&todo)?;
         let t = Instant::now();
-        let redrawn = match &self.original_poses {
-            Some(found) => {
-                let poses: Vec<Pose> = todo
-                    .iter()
-                    .map(|f| {
-                        found
-                            .get(&f.index)
-                            .cloned()
-                            .unwrap_or_else(|| Pose::empty(self.n_keypoints))
-                    })
-                    .collect();
-                self.stages
-                    .regenerator
-                    .regenerate_with_poses(&todo, edges.as_deref(), &poses)?
-            }
-            None => self
-                .stages
-                .regenerator
-                .regenerate(&todo, edges.as_deref())?,
-        };
+        let redrawn = self.redraw(&todo)?;
         self.record("regenerator").seconds += t.elapsed().as_secs_f64();
         self.record("regenerator").computed += todo.len();
-        if redrawn.len() != todo.len()
-            || redrawn
-                .iter()
-                .zip(&todo)
-                .any(|(r, f)| r.index != f.index || r.image.dimensions() != f.image.dimensions())
-        {
-            return Err(bad_output(
-                "regenerator",
-                "one frame per input frame, with its index and size",
-            ));
-        }
         let mut redrawn = redrawn.into_iter();
         for slot in out.iter_mut().filter(|o| o.is_none()) {
             let frame = redrawn
@@ -284,7 +255,10 @@ impl Driver<'_> {
     }
 
     /// Edge maps for `frames`, or `None` when the pipeline has no edge stage.
-    fn edges(&mut self, frames: &[Frame]) -> Result<Option<Vec<EdgeMap>>, PipelineError> {
+    pub(crate) fn edges(
+        &mut self,
+        frames: &[Frame],
+    ) -> Result<Option<Vec<EdgeMap>>, PipelineError> {
         if self.stages.edge.is_none() {
             return Ok(None);
         }
@@ -390,7 +364,7 @@ impl Driver<'_> {
     }
 }
 
-fn bad_output(stage: &str, expected: &str) -> PipelineError {
+pub(crate) fn bad_output(stage: &str, expected: &str) -> PipelineError {
     PipelineError::Stage(gait_core::StageError::backend(
         stage,
         format!("the {stage} stage returned malformed results (expected {expected})"),

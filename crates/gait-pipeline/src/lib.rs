@@ -15,6 +15,7 @@ pub mod outputs;
 mod overlay;
 mod passes;
 mod plan;
+mod redraw;
 pub mod registry;
 pub mod runner;
 pub mod selection;

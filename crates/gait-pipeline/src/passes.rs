@@ -133,6 +133,7 @@ impl Passes<'_> {
             pose_record: if regenerate { "pose" } else { ORIGINAL_POSE },
             order,
             last_estimated: None,
+            last_regenerated: None,
             cached_frames: BTreeSet::new(),
             original_poses,
             subject: self.subject,

@@ -104,11 +104,20 @@ pub(crate) fn stage_caches(
     // The poses follow the subject's boxes, so their keys cover them.
     let boxes: Option<Vec<(usize, PersonBox)>> =
         subject.map(|s| s.boxes.iter().map(|(f, b)| (*f, *b)).collect());
-    let edge_key = chain_key(
-        &models.input_key,
-        &on_device("edge", devices[0]),
-        &(&config.edge, &models.edge),
-    );
+    let edge_stage = on_device("edge", devices[0]);
+    // Around the subject, edge maps are taken on crops that follow its boxes.
+    let edge_key = match config.regenerator.subject_crop() {
+        None => chain_key(
+            &models.input_key,
+            &edge_stage,
+            &(&config.edge, &models.edge),
+        ),
+        Some(crop) => chain_key(
+            &models.input_key,
+            &edge_stage,
+            &(&config.edge, &models.edge, &crop, &boxes),
+        ),
+    };
     let original_key = chain_key(
         &models.input_key,
         &on_device(ORIGINAL_POSE, devices[2]),
