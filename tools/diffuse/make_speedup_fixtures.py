@@ -12,21 +12,44 @@ noise of modes.safetensors (make_modes_fixtures.py), and writes
       <case>.image  (1, 3, H, W) the output image in [0, 1]
       <case>.noise  (1, 4, H/8, W/8) the initial latents, for the cases that are not 64x64
       <case>.edge   (H, W) the edge map (uint8 values), for the cases that are not 64x64
+      <case>.start  (1, 4, 8, 8) the start latents of the init = "previous" cases (below)
 
 A case's settings: mode, scheduler, steps, strength (img2img), guidance_end (the CFG cut-off of
 cfg_cutoff.py), control_start / control_end (control_guidance_start / end), cache_interval and
 cache_branch (DeepCacheSDHelper.set_params' cache_interval and cache_branch_id; interval 1 = no
-DeepCache), token_merge_ratio (tomesd's ratio; 0 = no ToMe), merge_seed (below), height, width;
-also guidance_scale and conditioning_scale (GUIDANCE and COND_SCALE of make_modes_fixtures.py).
+DeepCache), token_merge_ratio (tomesd's ratio; 0 = no ToMe), merge_seed (below), height, width,
+init ("noise" or "previous", below); also guidance_scale and conditioning_scale (GUIDANCE and
+COND_SCALE of make_modes_fixtures.py).
+
+A case's "init" is "noise" (the first 12 cases: text2img from the noise, or img2img of the
+modes frame) or "previous" (the last cases, PREV_CASES; this project's init = "previous",
+where frame t starts from frame t-1's final latents noised to `strength`, an SDEdit start):
+  1. StableDiffusionControlNetPipeline text2img with the case's scheduler, steps, guidance_end
+     and control window but without DeepCache or ToMe, the modes edge map as control, its
+     initial latents drawn through pipeline_controlnet.randn_tensor replaced by `fixed`
+     (= modes.noise), output_type="latent": the final latents L of its loop, i.e. the scaled
+     latents (before the decode's 1 / vae.config.scaling_factor). Saved as <case>.start.
+  2. StableDiffusionControlNetImg2ImgPipeline with image=L (a 4-channel tensor), the case's
+     strength, the modes edge map as control_image, the img2img noise = modes.noise (its
+     randn_tensor replaced as for the other img2img cases) and the case's speed-ups; only the
+     last int(steps * strength) of the scheduler's steps run. <case>.image is its output.
+  L goes in unchanged, with no VAE and no scaling (checked in diffusers 0.42.1's source):
+  VaeImageProcessor.preprocess returns a torch tensor whose channel count equals its
+  config.vae_latent_channels (4) as is ("don't need any preprocess if the image is latents"),
+  and StableDiffusionControlNetImg2ImgPipeline.prepare_latents takes an image with
+  image.shape[1] == 4 as init_latents directly; only its VAE-encode branch multiplies by
+  vae.config.scaling_factor. So the start is scheduler.add_noise(L, modes.noise, t0) with t0
+  the first timestep that runs, which the script also asserts on every such call (a wrapper
+  of pipe.prepare_latents compares its input with L and its output with add_noise).
 
 DeepCache: helper.set_params(...); helper.enable() before each pipeline call and
 helper.disable() after. It wraps pipe.unet only, so the ControlNet runs at every step (stock).
 Stock DeepCache cannot take the CFG cut-off: its cached block outputs keep both guidance rows
 while the UNet then gets the conditional row only. So for the cases with both, the cut-off
-callback here (DeepCacheCFGCutoffCallback, a subclass of cfg_cutoff's) also replaces every
-tensor in helper.cached_output (inside tuples too) by its conditional half (the last half of
-the batch rows) at the step the cut-off fires on, as the cut-off does for the prompt
-embeddings and the control image.
+callback (cfg_cutoff.DeepCacheCFGCutoffCallback, a subclass of its ControlNet one) also
+replaces every tensor in helper.cached_output (inside tuples too) by its conditional half (the
+last half of the batch rows) at the step the cut-off fires on, as the cut-off does for the
+prompt embeddings and the control image.
 
 ToMe: tomesd.apply_patch(pipe, ratio=...) with its defaults otherwise (max_downsample 1,
 sx = sy = 2, use_rand, merging for self-attention only); tomesd.remove_patch(pipe) after. tomesd
@@ -59,8 +82,12 @@ stable (the order the Rust side uses: dst positions ascending, then src position
 failing when the two images differ by STABLE_TOL or more. The fixtures are stock tomesd's.
 
 After writing, it prints each case's max abs difference from the same settings without the
-speed-ups and from the other cases of the same size, and the UNet parts that ran at the full
-and the skipped steps of the DeepCache cases (forward hooks on leaf convolutions).
+speed-ups and from the other cases of the same size, the init = "previous" cases' differences
+from each other and from the same settings started from the modes frame (plain img2img), and
+the UNet parts that ran at the full and the skipped steps of the DeepCache cases (forward hooks
+on leaf convolutions).
+
+The script runs torch on one thread (main): the committed fixtures are its one-thread output.
 
 Needs the packages of make_modes_fixtures.py, and deepcache==0.1.1 tomesd==0.1.3.
 Regenerate (after make_fixtures.py and make_modes_fixtures.py):
@@ -76,11 +103,11 @@ import tomesd.merge
 from DeepCache import DeepCacheSDHelper
 from diffusers import StableDiffusionControlNetImg2ImgPipeline, StableDiffusionControlNetPipeline
 from diffusers.models.autoencoders import vae as vae_module
-from diffusers.pipelines.controlnet import pipeline_controlnet_img2img
+from diffusers.pipelines.controlnet import pipeline_controlnet, pipeline_controlnet_img2img
 from PIL import Image
 from safetensors.torch import load_file, save_file
 
-from cfg_cutoff import ControlNetCFGCutoffCallback, cutoff_kwargs
+from cfg_cutoff import cutoff_kwargs, speedup_cutoff_kwargs
 from make_cutoff_fixtures import SCHEDULERS
 from make_fixtures import SCHED_KW
 from make_modes_fixtures import COND_SCALE, FIX, GUIDANCE, fixed, load_tiny
@@ -100,6 +127,13 @@ CASES = [
     ("tome_tall_r05_ddim", "text2img", "ddim", 5, 1.0, 1.0, 0.0, 1.0, 1, 0, 0.5, 128, 64),
     ("both_cut_dpmpp2m", "text2img", "dpmpp2m", 8, 1.0, 0.4, 0.0, 0.75, 3, 0, 0.5, 64, 64),
     ("both_i2i_unipc", "img2img", "unipc", 8, 0.75, 1.0, 0.0, 1.0, 2, 1, 0.5, 64, 64),
+]
+# init = "previous" (the docstring), appended after CASES (so merge_seed = 7 + 12, 13, 14); same
+# fields as CASES, all img2img. prev_cpu: configs/zero-shot-cpu.toml's settings on the tiny models.
+PREV_CASES = [
+    ("prev_ddim", "img2img", "ddim", 6, 0.5, 1.0, 0.0, 1.0, 1, 0, 0.0, 64, 64),
+    ("prev_unipc_s07", "img2img", "unipc", 8, 0.7, 1.0, 0.0, 1.0, 1, 0, 0.0, 64, 64),
+    ("prev_cpu", "img2img", "dpmpp2m", 8, 0.5, 0.4, 0.0, 0.75, 3, 0, 0.5, 64, 64),
 ]
 MERGE_SEED0 = 7
 TALL_NOISE_SEED = 21
@@ -146,7 +180,7 @@ class TorchWithStream:
 
 ORIGINAL_BSM = tomesd.merge.bipartite_soft_matching_random2d
 TORCH_ARGSORT = torch.Tensor.argsort
-CHECKS = {"calls": 0, "draws": 0, "stable": 0, "unstable": 0, "force_stable": False}
+CHECKS = {"calls": 0, "draws": 0, "stable": 0, "unstable": 0, "force_stable": False, "latent_starts": 0}
 
 
 def stable_argsort(self, dim=-1, descending=False, stable=False):
@@ -206,42 +240,7 @@ def checked_bsm(metric, w, h, sx, sy, r, no_rand=False, generator=None):
 
 
 tomesd.merge.bipartite_soft_matching_random2d = checked_bsm
-
-
-def conditional_half(x):
-    """The last half of the batch rows of every tensor in `x` (tensors in nested tuples)."""
-    if torch.is_tensor(x):
-        assert x.shape[0] % 2 == 0, x.shape
-        return x[x.shape[0] // 2:]
-    if isinstance(x, (tuple, list)):
-        return type(x)(conditional_half(y) for y in x)
-    raise TypeError(f"DeepCache cached a {type(x)}")
-
-
-class DeepCacheCFGCutoffCallback(ControlNetCFGCutoffCallback):
-    """cfg_cutoff's callback that, when the cut-off fires, also keeps the conditional half of
-    DeepCache's cached block outputs (stock DeepCache would feed the one-row UNet its two-row
-    cache at the next skipped step)."""
-
-    def __init__(self, cutoff_step_ratio, halves, helper):
-        super().__init__(cutoff_step_ratio, halves)
-        self.helper = helper
-
-    def callback_fn(self, pipeline, step_index, timestep, callback_kwargs):
-        callback_kwargs = super().callback_fn(pipeline, step_index, timestep, callback_kwargs)
-        if step_index == int(pipeline.num_timesteps * self.config.cutoff_step_ratio):
-            cache = self.helper.cached_output
-            for key in cache:
-                cache[key] = conditional_half(cache[key])
-        return callback_kwargs
-
-
-def speedup_cutoff_kwargs(guidance_end, halves, helper):
-    """cfg_cutoff.cutoff_kwargs, with DeepCacheCFGCutoffCallback when DeepCache is on."""
-    if guidance_end >= 1.0 or helper is None:
-        return cutoff_kwargs(guidance_end, halves)
-    cb = DeepCacheCFGCutoffCallback(guidance_end, halves, helper)
-    return dict(callback_on_step_end=cb, callback_on_step_end_tensor_inputs=cb.tensor_inputs)
+TEXT2IMG_RANDN = pipeline_controlnet.randn_tensor
 
 
 class UnetTrace:
@@ -291,8 +290,47 @@ class UnetTrace:
             h.remove()
 
 
-def run_case(parts, inputs, case, seed, cache=True, merge=True, trace=False):
-    """One pipeline call; returns the image (1, 3, H, W), the merge draws and the UNet trace."""
+def make_start(parts, inputs, case):
+    """The start latents L of an init = "previous" case (the docstring): stock text2img with the
+    case's scheduler, steps and cut-offs, no speed-ups, initial latents = modes.noise through
+    randn_tensor, output_type="latent". Returns L (1, 4, H/8, W/8)."""
+    name, mode, sched, steps, strength, g_end, c_start, c_end, interval, branch, ratio, h, w = case
+    pipe = StableDiffusionControlNetPipeline(scheduler=SCHEDULERS[sched].from_config(SCHED_KW), **parts)
+    pipe.set_progress_bar_config(disable=True)
+    control = Image.fromarray(inputs["edge"][(h, w)].to(torch.uint8).numpy()).convert("RGB")
+    pipeline_controlnet.randn_tensor = fixed(inputs["noise"][(h, w)], "text2img noise")
+    try:
+        out = pipe(prompt_embeds=inputs["pos"], negative_prompt_embeds=inputs["neg"], image=control,
+                   num_inference_steps=steps, guidance_scale=GUIDANCE,
+                   controlnet_conditioning_scale=COND_SCALE, control_guidance_start=c_start,
+                   control_guidance_end=c_end, height=h, width=w, output_type="latent",
+                   **cutoff_kwargs(g_end, ["image"])).images
+    finally:
+        pipeline_controlnet.randn_tensor = TEXT2IMG_RANDN
+    assert out.shape == (1, 4, h // 8, w // 8), out.shape
+    return out.float().contiguous()
+
+
+def check_latent_start(pipe, start, noise):
+    """Wraps pipe.prepare_latents: asserts that the image it gets is `start` unchanged and that
+    the latents it returns are scheduler.add_noise(start, noise, t0) (no VAE, no scaling)."""
+    prepare = pipe.prepare_latents
+
+    def checked(image, timestep, *args, **kwargs):
+        assert torch.equal(image, start), "the latent start was changed before prepare_latents"
+        latents = prepare(image, timestep, *args, **kwargs)
+        want = pipe.scheduler.add_noise(start.clone(), noise.clone(), timestep)
+        assert torch.equal(latents, want), "prepare_latents did not take the start as latents"
+        CHECKS["latent_starts"] += 1
+        return latents
+
+    pipe.prepare_latents = checked
+
+
+def run_case(parts, inputs, case, seed, cache=True, merge=True, trace=False, start=None):
+    """One pipeline call; returns the image (1, 3, H, W), the merge draws and the UNet trace.
+    With `start` (img2img only), the img2img call starts from those latents (init = "previous")
+    instead of the modes frame."""
     name, mode, sched, steps, strength, g_end, c_start, c_end, interval, branch, ratio, h, w = case
     scheduler = SCHEDULERS[sched].from_config(SCHED_KW)
     call = dict(prompt_embeds=inputs["pos"], negative_prompt_embeds=inputs["neg"],
@@ -301,14 +339,18 @@ def run_case(parts, inputs, case, seed, cache=True, merge=True, trace=False):
                 control_guidance_end=c_end, height=h, width=w, output_type="np")
     control = Image.fromarray(inputs["edge"][(h, w)].to(torch.uint8).numpy()).convert("RGB")
     if mode == "text2img":
+        assert start is None, name
         pipe = StableDiffusionControlNetPipeline(scheduler=scheduler, **parts)
         args = dict(image=control, latents=inputs["noise"][(h, w)].clone())
         halves = ["image"]
     else:
         assert (h, w) == (64, 64)
         pipe = StableDiffusionControlNetImg2ImgPipeline(scheduler=scheduler, **parts)
-        args = dict(image=inputs["frame"], control_image=control, strength=strength)
+        image = inputs["frame"] if start is None else start.clone()
+        args = dict(image=image, control_image=control, strength=strength)
         halves = ["control_image"]
+        if start is not None:
+            check_latent_start(pipe, start, inputs["noise"][(h, w)])
     pipe.set_progress_bar_config(disable=True)
 
     helper = None
@@ -351,6 +393,10 @@ def describe(tracer):
 
 
 def main():
+    # One thread: the CPU kernels' sums are then in one order, so the fixtures come out byte for
+    # byte the same on a machine whatever its core count or load (with 2 threads they differ by
+    # rounding, ~4e-6).
+    torch.set_num_threads(1)
     unet, controlnet, vae, text, pos, neg = load_tiny()
     m = load_file(os.path.join(FIX, "modes.safetensors"))
     edge64 = m["modes.edge"]
@@ -367,12 +413,19 @@ def main():
 
     parts = dict(vae=vae, text_encoder=text, tokenizer=None, unet=unet, controlnet=controlnet,
                  safety_checker=None, feature_extractor=None, requires_safety_checker=False)
-    exp, listed, report = {}, [], []
+    exp, listed, report, from_frame = {}, [], [], {}
+    all_cases = [(c, "noise") for c in CASES] + [(c, "previous") for c in PREV_CASES]
     with torch.no_grad():
-        for idx, case in enumerate(CASES):
+        for idx, (case, init) in enumerate(all_cases):
             name, mode, sched, steps, strength, g_end, c_start, c_end, interval, branch, ratio, h, w = case
             seed = MERGE_SEED0 + idx
-            image, draws, tracer = run_case(parts, inputs, case, seed, trace=interval > 1)
+            start = None
+            if init == "previous":
+                start = make_start(parts, inputs, case)
+                assert torch.isfinite(start).all(), name
+                assert torch.equal(start, make_start(parts, inputs, case)), f"{name}: start not reproducible"
+                exp[f"{name}.start"] = start
+            image, draws, tracer = run_case(parts, inputs, case, seed, trace=interval > 1, start=start)
             assert torch.isfinite(image).all(), name
             exp[f"{name}.image"] = image
             if (h, w) != (64, 64):
@@ -382,19 +435,26 @@ def main():
                                guidance_scale=GUIDANCE, conditioning_scale=COND_SCALE,
                                guidance_end=g_end, control_start=c_start, control_end=c_end,
                                cache_interval=interval, cache_branch=branch,
-                               token_merge_ratio=ratio, merge_seed=seed, height=h, width=w))
-            base, _, _ = run_case(parts, inputs, case, seed, cache=False, merge=False)
-            again, draws2, _ = run_case(parts, inputs, case, seed)
+                               token_merge_ratio=ratio, merge_seed=seed, height=h, width=w, init=init))
+            sped = interval > 1 or ratio > 0
+            base = image
+            if sped:
+                base, _, _ = run_case(parts, inputs, case, seed, cache=False, merge=False, start=start)
+            again, draws2, _ = run_case(parts, inputs, case, seed, start=start)
             assert torch.equal(image, again), f"{name}: not reproducible"
             assert [d.tolist() for d in draws] == [d.tolist() for d in draws2]
             stable_diff = None
             if ratio > 0:
                 CHECKS["force_stable"] = True
-                stable, _, _ = run_case(parts, inputs, case, seed)
+                stable, _, _ = run_case(parts, inputs, case, seed, start=start)
                 CHECKS["force_stable"] = False
                 stable_diff = (image - stable).abs().max().item()
                 assert stable_diff < STABLE_TOL, f"{name}: the argsort order matters ({stable_diff})"
-            report.append((name, (image - base).abs().max().item(), draws, tracer, stable_diff))
+            if start is not None:
+                # The same call started from the modes frame (plain img2img), to show the start matters.
+                from_frame[name], _, _ = run_case(parts, inputs, case, seed)
+            report.append((name, (image - base).abs().max().item() if sped else None, draws, tracer,
+                           stable_diff))
     save_file(exp, os.path.join(FIX, "speedups.safetensors"))
     with open(os.path.join(FIX, "speedups.json"), "w") as f:
         json.dump(listed, f, indent=1)
@@ -404,9 +464,23 @@ def main():
     for name, diff, draws, tracer, stable_diff in report:
         shapes = sorted({tuple(d.shape) for d in draws})
         extra = "" if stable_diff is None else f"  from stable argsorts {stable_diff:.2e}"
+        if diff is None:
+            print(f"  {name:24} -        (no speed-ups)")
+            continue
         print(f"  {name:24} {diff:.5f}  merge draws {len(draws)} {shapes}{extra}")
         assert diff > 1e-4, f"{name}: the speed-up changed nothing"
-    names = [c[0] for c in CASES]
+    print(f'init = "previous" ({CHECKS["latent_starts"]} img2img calls took the start as latents, '
+          f"unscaled): max abs difference")
+    prev = [c[0] for c in PREV_CASES]
+    for name in prev:
+        d = (exp[f"{name}.image"] - from_frame[name]).abs().max().item()
+        print(f"  {name:24} from the same call started from the modes frame (plain img2img) {d:.5f}")
+        assert d > 1e-4, f"{name}: the start changed nothing"
+    for i, a in enumerate(prev):
+        for b in prev[i + 1:]:
+            d = (exp[f"{a}.image"] - exp[f"{b}.image"]).abs().max().item()
+            print(f"  {a} vs {b}: {d:.5f}")
+    names = [c[0] for c in CASES + PREV_CASES]
     least = None
     for i, a in enumerate(names):
         for b in names[i + 1:]:
@@ -419,7 +493,7 @@ def main():
     print(f"tomesd: {CHECKS['calls']} merges, {CHECKS['draws']} with a draw; torch's argsort of the "
           f"index buffer gave the stable order in {CHECKS['stable']}, another in {CHECKS['unstable']}")
     print("DeepCache: UNet parts run per call (hooks on leaf convolutions)")
-    for (name, _, _, tracer, _), case in zip(report, CASES):
+    for (name, _, _, tracer, _), case in zip(report, CASES + PREV_CASES):
         if tracer is None:
             continue
         pos_t = all(c["positional_t"] for c in tracer.calls)

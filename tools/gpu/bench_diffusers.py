@@ -11,10 +11,31 @@
                             UniPC (or --scheduler), guidance 7.5, the paper's prompts, optional
                             cut-offs (--guidance-end, --control-start/--control-end), one JSON line
                             of per-frame seconds (the first --warmup calls untimed), like regen_bench's.
+                            Issue 30's speed-ups (tools/diffuse/bench_regen_cpu.sh, cpu setting):
+                            --cache-interval N --cache-branch B: DeepCache 0.1.1's DeepCacheSDHelper
+                              (set_params(cache_interval, cache_branch_id)), enabled before each
+                              pipeline call and disabled after; with --guidance-end < 1 the cut-off
+                              also halves its cached outputs (cfg_cutoff.DeepCacheCFGCutoffCallback,
+                              as make_speedup_fixtures.py).
+                            --token-merge-ratio R: tomesd 0.1.3's apply_patch(pipe, ratio=R), its
+                              other defaults (stock tomesd, its own random draws).
+                            --width W: each square edge map cropped to its middle W columns, so the
+                              calls run at height = the maps' size, width = W.
+                            --init previous --strength S: the timed frames run one at a time on
+                              consecutive edge maps; the first is text2img from noise (as without
+                              it), each later one StableDiffusionControlNetImg2ImgPipeline (the same
+                              components) with image = the previous frame's final latents (scaled,
+                              taken as latents as is) noised to strength S, so int(steps * S)
+                              steps run. Every frame returns its latents (output_type="latent")
+                              and is then decoded by the VAE inside its timing. The JSON line's
+                              first_s is the first timed frame, median_s the median of the later
+                              ones (needs --frames >= 2 and --batch 1); --warmup calls are untimed
+                              text2img frames before the chain.
   report   JSONL            the markdown table for BENCHMARKS.md from the JSON lines of a run.
 
 Needs: torch (2.11+cu130 on the GPU machines), diffusers==0.42.1 (carried as wheels, see
-tools/gpu/README.md), transformers, safetensors, opencv-python-headless, numpy, pillow.
+tools/gpu/README.md), transformers, safetensors, opencv-python-headless, numpy, pillow; with
+the speed-up options deepcache==0.1.1 and tomesd==0.1.3.
 """
 
 import argparse
@@ -136,11 +157,17 @@ def diffusers_run(args):
     import numpy as np
     import torch
     from diffusers import (AutoencoderKL, ControlNetModel, DDIMScheduler, DPMSolverMultistepScheduler,
-                           StableDiffusionControlNetPipeline, UNet2DConditionModel, UniPCMultistepScheduler)
+                           StableDiffusionControlNetImg2ImgPipeline, StableDiffusionControlNetPipeline,
+                           UNet2DConditionModel, UniPCMultistepScheduler)
 
     sys.path.insert(0, os.path.join(ROOT, "tools", "diffuse"))
-    from cfg_cutoff import cutoff_kwargs
+    from cfg_cutoff import speedup_cutoff_kwargs
 
+    previous = args.init == "previous"
+    if previous and (args.batch != 1 or args.frames < 2):
+        raise SystemExit("--init previous needs --batch 1 and --frames >= 2 (the first frame and the rest)")
+    if not 0.0 < args.strength <= 1.0:
+        raise SystemExit(f"--strength {args.strength}: must be in (0, 1]")
     scheduler = {"unipc": UniPCMultistepScheduler, "ddim": DDIMScheduler,
                  "dpmpp2m": DPMSolverMultistepScheduler}[args.scheduler]
     from PIL import Image
@@ -161,34 +188,102 @@ def diffusers_run(args):
         safety_checker=None, feature_extractor=None, requires_safety_checker=False,
     ).to(dev)
     pipe.set_progress_bar_config(disable=True)
+    # The same modules (and scheduler) for the frames that start from the previous latents.
+    img2img = (StableDiffusionControlNetImg2ImgPipeline(**pipe.components, requires_safety_checker=False)
+               if previous else None)
+    if img2img is not None:
+        img2img.set_progress_bar_config(disable=True)
+    helpers = {}
+    if args.cache_interval > 1:
+        from DeepCache import DeepCacheSDHelper
+
+        for p in filter(None, [pipe, img2img]):
+            helpers[id(p)] = DeepCacheSDHelper(pipe=p)
+            helpers[id(p)].set_params(cache_interval=args.cache_interval, cache_branch_id=args.cache_branch)
+    if args.token_merge_ratio > 0:
+        import tomesd
+
+        tomesd.apply_patch(pipe, ratio=args.token_merge_ratio)  # patches pipe.unet, shared by img2img
     load_s = time.perf_counter() - t0
+
     names = sorted(f for f in os.listdir(args.edges) if f.endswith(".png"))
     edges = [Image.open(os.path.join(args.edges, f)).convert("RGB") for f in names]
-    size = edges[0].width
+    height = edges[0].height
+    width = args.width or edges[0].width
+    if width > edges[0].width or width % 8:
+        raise SystemExit(f"--width {width}: must be a multiple of 8 and at most the maps' {edges[0].width}")
+    if width != edges[0].width:
+        left = (edges[0].width - width) // 2
+        edges = [e.crop((left, 0, left + width, e.height)) for e in edges]
     sync = torch.cuda.synchronize if dev.startswith("cuda") else (lambda: None)
+    common = dict(num_inference_steps=args.steps, guidance_scale=7.5, height=height, width=width,
+                  control_guidance_start=args.control_start, control_guidance_end=args.control_end)
+
+    def call(p, batch_prompts, gen, **kw):
+        """One pipeline call with DeepCache enabled around it (when on) and the cut-off."""
+        helper = helpers.get(id(p))
+        halves = ["control_image"] if p is img2img else ["image"]
+        if helper is not None:
+            helper.enable()
+        try:
+            return p(batch_prompts, negative_prompt=[NEGATIVE] * len(batch_prompts), generator=gen,
+                     **common, **kw, **speedup_cutoff_kwargs(args.guidance_end, halves, helper)).images
+        finally:
+            if helper is not None:
+                helper.disable()
+
+    @torch.no_grad()
+    def decode(latents):
+        image = pipe.vae.decode(latents / pipe.vae.config.scaling_factor, return_dict=False)[0]
+        return pipe.image_processor.postprocess(image, output_type="np")
+
     per_frame, k = [], 0
-    for call in range(args.warmup + -(-args.frames // args.batch)):
-        images = [edges[(k + j) % len(edges)] for j in range(args.batch)]
-        k += args.batch
-        gen = [torch.Generator(dev).manual_seed(k + j) for j in range(args.batch)]
-        sync()
-        t = time.perf_counter()
-        out = pipe([PROMPT] * args.batch, image=images, negative_prompt=[NEGATIVE] * args.batch,
-                   num_inference_steps=args.steps, guidance_scale=7.5, height=size, width=size,
-                   control_guidance_start=args.control_start, control_guidance_end=args.control_end,
-                   generator=gen, output_type="np", **cutoff_kwargs(args.guidance_end, ["image"])).images
-        sync()
-        s = time.perf_counter() - t
-        assert len(out) == args.batch and np.asarray(out).shape[1:3] == (size, size)
-        if call >= args.warmup:
-            per_frame += [s / args.batch] * args.batch
-    per_frame = per_frame[:args.frames]
+    if not previous:
+        for c in range(args.warmup + -(-args.frames // args.batch)):
+            images = [edges[(k + j) % len(edges)] for j in range(args.batch)]
+            k += args.batch
+            gen = [torch.Generator(dev).manual_seed(k + j) for j in range(args.batch)]
+            sync()
+            t = time.perf_counter()
+            out = call(pipe, [PROMPT] * args.batch, gen, image=images, output_type="np")
+            sync()
+            s = time.perf_counter() - t
+            assert len(out) == args.batch and np.asarray(out).shape[1:3] == (height, width)
+            if c >= args.warmup:
+                per_frame += [s / args.batch] * args.batch
+        per_frame = per_frame[:args.frames]
+        first_s, median_s = per_frame[0], statistics.median(per_frame)
+    else:
+        latents = None
+        for c in range(args.warmup + args.frames):
+            # Untimed warm-up frames, then the chain: frame 0 from noise, the others from the latents
+            # of the frame before.
+            image = edges[k % len(edges)]
+            k += 1
+            gen = torch.Generator(dev).manual_seed(k)
+            chain = c >= args.warmup
+            sync()
+            t = time.perf_counter()
+            if not chain or c == args.warmup:
+                latents = call(pipe, [PROMPT], gen, image=image, output_type="latent")
+            else:
+                latents = call(img2img, [PROMPT], gen, image=latents, control_image=image,
+                               strength=args.strength, output_type="latent")
+            out = decode(latents)
+            sync()
+            s = time.perf_counter() - t
+            assert latents.shape[1] == 4 and np.asarray(out).shape[1:3] == (height, width)
+            if chain:
+                per_frame.append(s)
+        first_s, median_s = per_frame[0], statistics.median(per_frame[1:])
     print(json.dumps({
         "impl": "diffusers", "device": dev, "dtype": args.dtype, "steps": args.steps, "batch": args.batch,
         "scheduler": args.scheduler, "guidance_end": args.guidance_end,
         "control_guidance": [args.control_start, args.control_end],
-        "size": size, "load_s": round(load_s, 3), "median_s": round(statistics.median(per_frame), 4),
-        "per_frame_s": [round(s, 4) for s in per_frame],
+        "cache_interval": args.cache_interval, "cache_branch": args.cache_branch,
+        "token_merge_ratio": args.token_merge_ratio, "init": args.init, "strength": args.strength,
+        "size": height, "width": width, "load_s": round(load_s, 3), "first_s": round(first_s, 4),
+        "median_s": round(median_s, 4), "per_frame_s": [round(s, 4) for s in per_frame],
         "torch": torch.__version__, "diffusers": __import__("diffusers").__version__,
     }), flush=True)
 
@@ -245,6 +340,12 @@ def main():
     a.add_argument("--batch", type=int, default=1)
     a.add_argument("--frames", type=int, default=8)
     a.add_argument("--warmup", type=int, default=1)
+    a.add_argument("--cache-interval", type=int, default=1, help="DeepCache's cache_interval (1: off)")
+    a.add_argument("--cache-branch", type=int, default=0, help="DeepCache's cache_branch_id")
+    a.add_argument("--token-merge-ratio", type=float, default=0.0, help="tomesd's ratio (0: off)")
+    a.add_argument("--width", type=int, default=0, help="crop the edge maps to their middle W columns")
+    a.add_argument("--init", default="noise", choices=["noise", "previous"])
+    a.add_argument("--strength", type=float, default=1.0, help="with --init previous")
     a = sub.add_parser("report")
     a.add_argument("jsonl")
     args = p.parse_args()

@@ -1,8 +1,10 @@
 //! DeepCache and token merging on the tiny random models against stock PyPI
 //! `deepcache` 0.1.1 (`DeepCacheSDHelper`) and `tomesd` 0.1.3 on diffusers'
-//! ControlNet pipelines (fixtures from tools/diffuse/make_speedup_fixtures.py,
-//! same noise and the same SplitMix64 stream of merge picks on both sides),
-//! each with a mutation that must break the match.
+//! ControlNet pipelines, and the start from a previous frame's latent
+//! (`init = "previous"`) against diffusers' img2img pipeline handed those
+//! latents (fixtures from tools/diffuse/make_speedup_fixtures.py, same noise
+//! and the same SplitMix64 stream of merge picks on both sides), each with a
+//! mutation that must break the match.
 
 mod common;
 
@@ -70,6 +72,14 @@ fn run(pipe: &ControlnetPipeline, c: &Value, p: &DenoiseParams) -> Tensor {
             .unwrap();
         (control, img[&format!("{name}.noise")].clone())
     };
+    if c["init"] == "previous" {
+        let start = &images()[&format!("{name}.start")];
+        let strength = c["strength"].as_f64().unwrap();
+        return pipe
+            .from_latents(&ctx, &control, start, &noise, strength, p)
+            .unwrap()
+            .images;
+    }
     match c["mode"].as_str().unwrap() {
         "text2img" => pipe.generate(&ctx, &control, &noise, p),
         _ => {
@@ -97,10 +107,10 @@ fn want(c: &Value) -> Tensor {
 }
 
 #[test]
-fn every_case_matches_deepcache_and_tomesd() {
+fn every_case_matches_deepcache_tomesd_and_img2img_from_latents() {
     let pipe = pipeline();
     let cases = cases();
-    assert_eq!(cases.len(), 12, "speedups.json lists every case");
+    assert_eq!(cases.len(), 15, "speedups.json lists every case");
     for c in &cases {
         let img = run(&pipe, c, &params(c));
         assert_close(c["name"].as_str().unwrap(), &img, &want(c), TOL);
@@ -143,4 +153,21 @@ fn a_changed_merge_ratio_or_seed_fails_the_match() {
     let mut p = params(c);
     p.savings.merge_seed += 1;
     assert_breaks("merge seed + 1", &pipe, c, &p);
+}
+
+#[test]
+fn a_changed_strength_or_start_fails_the_previous_latent_match() {
+    let pipe = pipeline();
+    let cases = cases();
+    let c = cases.iter().find(|c| c["name"] == "prev_ddim").unwrap();
+    let mut changed = c.clone();
+    changed["strength"] = serde_json::json!(0.7);
+    assert_breaks("strength 0.7 for 0.5", &pipe, &changed, &params(c));
+    // The preset's combination: its savings off must not match either.
+    let c = cases.iter().find(|c| c["name"] == "prev_cpu").unwrap();
+    let mut p = params(c);
+    p.savings = Savings::default();
+    let e = rel_err(&run(&pipe, c, &p), &want(c));
+    println!("prev_cpu without savings: relative error {e:.3e}");
+    assert!(e > 10.0 * TOL, "savings off still match ({e:.3e})");
 }
