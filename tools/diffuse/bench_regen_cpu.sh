@@ -83,6 +83,7 @@ PY
 eval "$keys"
 
 results=$work/results.jsonl
+rm -f "$work/max_rss_kb.txt"
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
 flags=$(grep -m1 '^flags' /proc/cpuinfo | tr ' ' '\n' | grep -xE 'avx2|fma|avx512f|avx512_bf16|amx_tile|neon|asimd' | tr '\n' ' ')
 printf '{"date": "%s", "cpu": "%s", "flags": "%s", "threads": %s, "rounds": %s, "tiny": %s}\n' \
@@ -119,6 +120,7 @@ for _ in $(seq "$rounds"); do
         if [[ " $impls " == *" diffusers "* ]]; then
             echo "== diffusers, $s settings" >&2
             # shellcheck disable=SC2086 # pyargs holds separate options
+            /usr/bin/time -f "diffusers $s %M" -a -o "$work/max_rss_kb.txt" \
             $python "$root/tools/gpu/bench_diffusers.py" diffusers "$work" "$work/edges" --device cpu --dtype f32 \
                 --steps "${steps[$s]}" --scheduler "${sched[$s]}" --guidance-end "${gend[$s]}" \
                 --control-start "${cs[$s]}" --control-end "${ce[$s]}" --frames "${frames[$s]}" --warmup 0 \
@@ -127,6 +129,7 @@ for _ in $(seq "$rounds"); do
         if [[ " $impls " == *" ours "* ]]; then
             echo "== ours, $s settings" >&2
             # shellcheck disable=SC2086 # ourargs holds separate key=value arguments
+            /usr/bin/time -f "ours $s %M" -a -o "$work/max_rss_kb.txt" \
             "$bin/regen_bench" "$work/sd" "$work/controlnet" "$work/edges" device=cpu dtype=f32 \
                 steps="${steps[$s]}" scheduler="${sched[$s]}" guidance_end="${gend[$s]}" \
                 control_guidance_start="${cs[$s]}" control_guidance_end="${ce[$s]}" frames="${frames[$s]}" \
@@ -135,3 +138,6 @@ for _ in $(seq "$rounds"); do
     done
 done
 $python "$root/tools/diffuse/regen_cpu_report.py" "$results" ${SAMPLE_RUN:+"$SAMPLE_RUN"} | tee "$work/bench.md"
+# Peak resident memory of each process (GNU time's %M, KiB), for BENCHMARKS.md.
+echo "peak RSS (KiB) per process:" | tee -a "$work/bench.md"
+tee -a "$work/bench.md" < "$work/max_rss_kb.txt"
