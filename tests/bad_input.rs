@@ -187,6 +187,41 @@ fn speed_settings_out_of_range_name_the_key() {
 }
 
 #[test]
+fn cpu_settings_out_of_range_name_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let cpu = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/zero-shot-cpu.toml");
+    let cases: [(&str, &[&str]); 11] = [
+        ("regenerator.cache_interval=0", &["regenerator.cache_interval = 0", "1..=8"]),
+        ("regenerator.cache_interval=9", &["regenerator.cache_interval = 9"]),
+        ("regenerator.cache_branch=12", &["regenerator.cache_branch = 12", "0..=11"]),
+        (
+            "regenerator.token_merge_ratio=0.95",
+            &["regenerator.token_merge_ratio = 0.95", "[0, 0.9]"],
+        ),
+        ("regenerator.crop_size=[250, 512]", &["regenerator.crop_size", "multiple of 64"]),
+        ("regenerator.crop_size=[256, 2048]", &["regenerator.crop_size", "1024"]),
+        ("subject.enabled=false", &["region = \"subject\"", "subject.enabled"]),
+        ("regenerator.strength=1.5", &["regenerator.strength = 1.5", "(0, 1]"]),
+        ("regenerator.strength=0", &["regenerator.strength = 0"]),
+        ("regenerator.mode=\"inpaint\"", &["mode = \"inpaint\"", "region = \"frame\""]),
+        ("regenerator.backend=\"ort\"", &["cache_interval", "backend = \"candle\""]),
+    ];
+    for (set, words) in cases {
+        fails_with(
+            gait()
+                .args(["run", "--no-progress", "--config"])
+                .arg(&cpu)
+                .args(["--set", set, "--input"])
+                .arg(common::sample_video())
+                .arg("--out")
+                .arg(dir.path().join("out")),
+            words,
+        );
+        assert_no_results(&dir.path().join("out"));
+    }
+}
+
+#[test]
 fn missing_model_file_names_the_fetch_command() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");

@@ -10,9 +10,8 @@
 #   cargo build -p gait-diffuse --example regen_bench
 #   PYTHON=/path/to/venv/bin/python tools/diffuse/bench_regen_cpu.sh
 #
-# The cpu setting: 512 tall; crop_size = [W, H] crops each square edge map to its middle
-# W * 512 / H columns (both sides run at that width: the subject crop's cost, not the subject
-# pass's); init = "previous" runs FRAMES frames one at a time on consecutive maps, the first from
+# The cpu setting: crop_size = [W, H] resizes each square edge map to H x H and crops it to its
+# middle W columns (both sides run at W x H: the subject crop's cost, not the subject pass's); init = "previous" runs FRAMES frames one at a time on consecutive maps, the first from
 # noise and each later one from the one before's latents at `strength`, and both sides report the
 # first frame (first_s) and the median of the later ones (median_s) apart.
 #
@@ -58,9 +57,11 @@ fi
 size=$($python -c 'import glob, sys; from PIL import Image; print(Image.open(sorted(glob.glob(sys.argv[1]))[0]).height)' \
     "$work/edges/*.png")
 declare -A steps=([paper]=20) sched=([paper]=unipc) gend=([paper]=1.0) cs=([paper]=0.0) ce=([paper]=1.0)
-declare -A ci=([paper]=1) cb=([paper]=0) tm=([paper]=0.0) init=([paper]=noise) strength=([paper]=1.0) width=([paper]=0)
-# The presets' regenerator keys, from the TOMLs themselves (crop_size = [W, H] becomes the width at
-# the maps' height, $size).
+declare -A ci=([paper]=1) cb=([paper]=0) tm=([paper]=0.0) init=([paper]=noise) strength=([paper]=1.0)
+declare -A width=([paper]=0) height=([paper]=0)
+# The presets' regenerator keys, from the TOMLs themselves (crop_size = [W, H]: the maps resized to
+# H x H and cropped to their middle W columns; on maps smaller than H (TINY), W * size / H columns of
+# the maps as they are).
 keys=$($python - "$root/configs/zero-shot-fast.toml" "$root/configs/zero-shot-cpu.toml" "$size" <<'PY'
 import shlex, sys, tomllib
 size = int(sys.argv[3])
@@ -70,12 +71,15 @@ for setting, path in (("fast", sys.argv[1]), ("cpu", sys.argv[2])):
                 cs=r.get("control_guidance_start", 0.0), ce=r.get("control_guidance_end", 1.0),
                 ci=r.get("cache_interval", 1), cb=r.get("cache_branch", 0),
                 tm=r.get("token_merge_ratio", 0.0), init=r.get("init", "noise"),
-                strength=r.get("strength", 1.0), width=0)
+                strength=r.get("strength", 1.0), width=0, height=0)
     if r.get("region", "frame") == "subject":
         w, h = r["crop_size"]
-        keys["width"] = w * size // h
-        if keys["width"] % 8 or w * size % h:
-            sys.exit(f"{path}: crop_size {w}x{h} at height {size} is not a width in multiples of 8")
+        if size >= h:
+            keys["width"], keys["height"] = w, h
+        else:
+            keys["width"] = w * size // h
+            if keys["width"] % 8 or w * size % h:
+                sys.exit(f"{path}: crop_size {w}x{h} at height {size} is not a width in multiples of 8")
     for k, v in keys.items():
         print(f"{k}[{setting}]={shlex.quote(str(v))}")
 PY
@@ -108,10 +112,10 @@ for s in $settings; do
     pyargs[$s]= ourargs[$s]=
     if [ "$s" = cpu ]; then
         pyargs[$s]="--cache-interval ${ci[$s]} --cache-branch ${cb[$s]} --token-merge-ratio ${tm[$s]}"
-        pyargs[$s]+=" --width ${width[$s]} --init ${init[$s]} --strength ${strength[$s]}"
+        pyargs[$s]+=" --width ${width[$s]} --height ${height[$s]} --init ${init[$s]} --strength ${strength[$s]}"
         ourargs[$s]="cache_interval=${ci[$s]} cache_branch=${cb[$s]} token_merge_ratio=${tm[$s]}"
         ourargs[$s]+=" init=${init[$s]} strength=${strength[$s]}"
-        if [ "${width[$s]}" != 0 ]; then ourargs[$s]+=" width=${width[$s]}"; fi
+        if [ "${width[$s]}" != 0 ]; then ourargs[$s]+=" width=${width[$s]} height=${height[$s]}"; fi
     fi
 done
 

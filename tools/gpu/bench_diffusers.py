@@ -19,6 +19,8 @@
                               as make_speedup_fixtures.py).
                             --token-merge-ratio R: tomesd 0.1.3's apply_patch(pipe, ratio=R), its
                               other defaults (stock tomesd, its own random draws).
+                            --height H: each square edge map resized to H x H first (Pillow's
+                              bilinear, as regen_bench's `height`);
                             --width W: each square edge map cropped to its middle W columns, so the
                               calls run at height = the maps' size, width = W.
                             --init previous --strength S: the timed frames run one at a time on
@@ -209,6 +211,8 @@ def diffusers_run(args):
     names = sorted(f for f in os.listdir(args.edges) if f.endswith(".png"))
     edges = [Image.open(os.path.join(args.edges, f)).convert("RGB") for f in names]
     height = edges[0].height
+    if args.height:
+        edges = [e.resize((args.height, args.height), Image.BILINEAR) for e in edges]
     width = args.width or edges[0].width
     if width > edges[0].width or width % 8:
         raise SystemExit(f"--width {width}: must be a multiple of 8 and at most the maps' {edges[0].width}")
@@ -343,6 +347,7 @@ def main():
     a.add_argument("--cache-interval", type=int, default=1, help="DeepCache's cache_interval (1: off)")
     a.add_argument("--cache-branch", type=int, default=0, help="DeepCache's cache_branch_id")
     a.add_argument("--token-merge-ratio", type=float, default=0.0, help="tomesd's ratio (0: off)")
+    a.add_argument("--height", type=int, default=0, help="resize the square edge maps to H x H first")
     a.add_argument("--width", type=int, default=0, help="crop the edge maps to their middle W columns")
     a.add_argument("--init", default="noise", choices=["noise", "previous"])
     a.add_argument("--strength", type=float, default=1.0, help="with --init previous")

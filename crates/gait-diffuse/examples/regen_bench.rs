@@ -7,9 +7,9 @@
 //! keys: device (cpu | cuda | cuda:N), dtype (f32 | f16 | bf16), steps,
 //! batch, frames (timed), warmup (untimed), scheduler (unipc | ddim | dpmpp2m),
 //! guidance_end, control_guidance_start, control_guidance_end, cache_interval,
-//! cache_branch, token_merge_ratio (issue 30's savings), width (crop each edge
-//! map to its middle `width` columns: the subject crop's canvas, e.g. 256 of
-//! 512), init (noise | previous: frames one by one, each from the last one's
+//! cache_branch, token_merge_ratio (issue 30's savings), height (resize each
+//! edge map to `height` square first), width (then crop it to its middle
+//! `width` columns: the subject crop's canvas, e.g. 256 of 512), init (noise | previous: frames one by one, each from the last one's
 //! latent) and strength (init = previous).
 //! EDGES_DIR holds square grayscale PNG edge maps (white edges on black);
 //! frame i uses the (i mod n)-th. Prints one JSON line; with init = previous
@@ -27,7 +27,7 @@ type Res<T> = Result<T, Box<dyn std::error::Error>>;
 const USAGE: &str = "usage: regen_bench SD_DIR CONTROLNET_DIR EDGES_DIR [device=cuda] [dtype=f16] \
                      [steps=20] [batch=1] [frames=8] [warmup=1] [scheduler=unipc] [guidance_end=1] \
                      [control_guidance_start=0] [control_guidance_end=1] [cache_interval=1] \
-                     [cache_branch=0] [token_merge_ratio=0] [width=SIZE] [init=noise] [strength=0.5]";
+                     [cache_branch=0] [token_merge_ratio=0] [height=SIZE] [width=SIZE] [init=noise] [strength=0.5]";
 
 fn main() {
     if let Err(e) = run() {
@@ -56,6 +56,7 @@ fn run() -> Res<()> {
         ("cache_branch", "0"),
         ("token_merge_ratio", "0.0"),
         ("width", "0"),
+        ("height", "0"),
         ("init", "noise"),
         ("strength", "0.5"),
     ]
@@ -76,6 +77,13 @@ fn run() -> Res<()> {
     let (steps, batch, frames, warmup) =
         (num("steps")?, num("batch")?, num("frames")?, num("warmup")?);
     let edges = read_edges(Path::new(&args[2]))?;
+    let edges: Vec<image::GrayImage> = match num("height")? {
+        0 => edges,
+        h => edges
+            .iter()
+            .map(|e| image::imageops::resize(e, h as u32, h as u32, image::imageops::Triangle))
+            .collect(),
+    };
     let size = edges[0].width();
     let width = match num("width")? {
         0 => size,

@@ -188,6 +188,14 @@ impl ControlnetConfig {
         }
         self.cutoffs().validate()?;
         self.savings(0).validate(self.steps)?;
+        if self.backend == Backend::Ort && self.savings(0).any() {
+            return Err(format!(
+                "regenerator.cache_interval = {} and regenerator.token_merge_ratio = {} need \
+                 backend = \"candle\": the ONNX export is one UNet graph, which cannot stop at \
+                 DeepCache's branch or merge tokens inside its attention; set them to 1 and 0 for \"ort\"",
+                self.cache_interval, self.token_merge_ratio
+            ));
+        }
         if self.batch == 0 {
             return Err("regenerator.batch must be at least 1".into());
         }
@@ -221,6 +229,13 @@ impl ControlnetConfig {
     fn validate_crop(&self) -> Result<(), String> {
         if self.region != Region::Subject {
             return Ok(());
+        }
+        if self.mode == RegenMode::Inpaint {
+            return Err(
+                "regenerator.region = \"subject\" cannot be used with mode = \"inpaint\" (the leg \
+                 mask is drawn on the whole frame); use region = \"frame\""
+                    .into(),
+            );
         }
         for side in self.crop_size {
             if side == 0 || !side.is_multiple_of(64) || side > MAX_CROP_SIDE {

@@ -103,6 +103,11 @@ impl RegeneratorConfig {
         }
     }
 
+    /// True when each frame starts from the one before (`init = "previous"`).
+    pub fn chains_frames(&self) -> bool {
+        matches!(self, RegeneratorConfig::Controlnet(c) if c.init == Init::Previous)
+    }
+
     /// True when the regenerator hands frames on unchanged, so the runner need
     /// not cache its output.
     pub fn is_identity(&self) -> bool {

@@ -126,15 +126,20 @@ pub(crate) fn stage_caches(
     // An inpainting regenerator draws inside a mask made from the original
     // frame's pose, so its images depend on that pose too.
     let needs_poses = config.regenerator.needs_poses();
-    let regen_key = chain_key(
-        &edge_key,
-        &on_device("regenerator", devices[1]),
-        &(
-            &config.regenerator,
-            &models.regenerator,
-            needs_poses.then_some(&original_key),
-        ),
+    let regen_stage = on_device("regenerator", devices[1]);
+    let regen_parts = (
+        &config.regenerator,
+        &models.regenerator,
+        needs_poses.then_some(&original_key),
     );
+    // A regenerator that starts each frame from the one before depends on
+    // which frames come before it: the first frame, the stride and the rule.
+    let regen_key = if config.regenerator.chains_frames() {
+        let chain = (start, sel.stride, sel.tracking_key());
+        chain_key(&edge_key, &regen_stage, &(regen_parts, chain))
+    } else {
+        chain_key(&edge_key, &regen_stage, &regen_parts)
+    };
     // A tracking estimator's result depends on the frames it saw before, so
     // the pose key covers the first frame, the stride and, with selective
     // regeneration, the rule that picks the frames. Edge maps and

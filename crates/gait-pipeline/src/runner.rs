@@ -218,6 +218,14 @@ pub fn regenerate_part(
             "regenerating a part of a run needs the cache (run.cache = true)",
         ));
     }
+    // A part would start afresh where the frame before belongs to another part.
+    if parts > 1 && config.regenerator.chains_frames() {
+        return Err(PipelineError::config(
+            "[regenerator]",
+            "init = \"previous\" starts each frame from the one before, which splitting the \
+             frames into parts would cut apart: use init = \"noise\" to split",
+        ));
+    }
     let mut p = prepare(config, opts)?;
     let total = range_len(config, &p.info);
     let bar = |pass: &str| progress_bar(opts.progress, total, pass);
