@@ -191,20 +191,47 @@ fn cpu_settings_out_of_range_name_the_key() {
     let dir = tempfile::tempdir().unwrap();
     let cpu = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/zero-shot-cpu.toml");
     let cases: [(&str, &[&str]); 11] = [
-        ("regenerator.cache_interval=0", &["regenerator.cache_interval = 0", "1..=8"]),
-        ("regenerator.cache_interval=9", &["regenerator.cache_interval = 9"]),
-        ("regenerator.cache_branch=12", &["regenerator.cache_branch = 12", "0..=11"]),
+        (
+            "regenerator.cache_interval=0",
+            &["regenerator.cache_interval = 0", "1..=8"],
+        ),
+        (
+            "regenerator.cache_interval=9",
+            &["regenerator.cache_interval = 9"],
+        ),
+        (
+            "regenerator.cache_branch=12",
+            &["regenerator.cache_branch = 12", "0..=11"],
+        ),
         (
             "regenerator.token_merge_ratio=0.95",
             &["regenerator.token_merge_ratio = 0.95", "[0, 0.9]"],
         ),
-        ("regenerator.crop_size=[250, 512]", &["regenerator.crop_size", "multiple of 64"]),
-        ("regenerator.crop_size=[256, 2048]", &["regenerator.crop_size", "1024"]),
-        ("subject.enabled=false", &["region = \"subject\"", "subject.enabled"]),
-        ("regenerator.strength=1.5", &["regenerator.strength = 1.5", "(0, 1]"]),
+        (
+            "regenerator.crop_size=[250, 512]",
+            &["regenerator.crop_size", "multiple of 64"],
+        ),
+        (
+            "regenerator.crop_size=[256, 2048]",
+            &["regenerator.crop_size", "1024"],
+        ),
+        (
+            "subject.enabled=false",
+            &["region = \"subject\"", "subject.enabled"],
+        ),
+        (
+            "regenerator.strength=1.5",
+            &["regenerator.strength = 1.5", "(0, 1]"],
+        ),
         ("regenerator.strength=0", &["regenerator.strength = 0"]),
-        ("regenerator.mode=\"inpaint\"", &["mode = \"inpaint\"", "region = \"frame\""]),
-        ("regenerator.backend=\"ort\"", &["cache_interval", "backend = \"candle\""]),
+        (
+            "regenerator.mode=\"inpaint\"",
+            &["mode = \"inpaint\"", "region = \"frame\""],
+        ),
+        (
+            "regenerator.backend=\"ort\"",
+            &["cache_interval", "backend = \"candle\""],
+        ),
     ];
     for (set, words) in cases {
         fails_with(

@@ -29,7 +29,7 @@ c = tomllib.load(open(sys.argv[2], "rb"))["regenerator"]
 w, h = c["crop_size"]
 print(f"fast='steps={f['steps']} scheduler={f['scheduler']} guidance_end={f['guidance_end']} "
       f"control_guidance_start={f['control_guidance_start']} control_guidance_end={f['control_guidance_end']}'")
-print(f"crop='width={w * 512 // h}'")
+print(f"crop='width={w} height={h}'")
 print(f"cache='cache_interval={c['cache_interval']} cache_branch={c['cache_branch']}'")
 print(f"merge='token_merge_ratio={c['token_merge_ratio']}'")
 print(f"previous='init={c['init']} strength={c['strength']}'")

@@ -210,9 +210,9 @@ def diffusers_run(args):
 
     names = sorted(f for f in os.listdir(args.edges) if f.endswith(".png"))
     edges = [Image.open(os.path.join(args.edges, f)).convert("RGB") for f in names]
-    height = edges[0].height
     if args.height:
         edges = [e.resize((args.height, args.height), Image.BILINEAR) for e in edges]
+    height = edges[0].height
     width = args.width or edges[0].width
     if width > edges[0].width or width % 8:
         raise SystemExit(f"--width {width}: must be a multiple of 8 and at most the maps' {edges[0].width}")

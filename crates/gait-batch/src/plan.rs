@@ -146,7 +146,11 @@ impl Plan {
             let config = row_config(study, row, &cache)
                 .map_err(|e| problems.push(e))
                 .ok();
-            if split_frames > 1 && config.as_ref().is_some_and(|c| c.regenerator.chains_frames()) {
+            if split_frames > 1
+                && config
+                    .as_ref()
+                    .is_some_and(|c| c.regenerator.chains_frames())
+            {
                 problems.push(
                     "regenerator.init = \"previous\" starts each frame from the one before, which \
                      --split-frames would cut apart: use init = \"noise\" or no --split-frames"
