@@ -57,6 +57,8 @@ pub use vae_decoder::VaeDecoder;
 pub use vae_encoder::VaeEncoder;
 
 /// The `[regenerator]` table. `kind` picks the regenerator.
+// Built once per run from the TOML; boxing the big variant would only add noise at every use.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum RegeneratorConfig {

@@ -49,7 +49,7 @@ impl DeepCache {
     pub fn step(&mut self, i: usize) -> CacheStep<'_> {
         CacheStep {
             branch: self.branch,
-            reuse: i % self.interval != 0 && self.feature.is_some(),
+            reuse: !i.is_multiple_of(self.interval) && self.feature.is_some(),
             feature: &mut self.feature,
         }
     }
@@ -61,7 +61,7 @@ impl DeepCache {
     /// True when step `i` runs the shallow branch only (its ControlNet call
     /// then needs only the shallow residuals).
     pub fn reuses(&self, i: usize) -> bool {
-        i % self.interval != 0 && self.feature.is_some()
+        !i.is_multiple_of(self.interval) && self.feature.is_some()
     }
 }
 
