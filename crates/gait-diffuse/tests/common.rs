@@ -340,3 +340,14 @@ pub fn check_cutoffs(
         assert_close(&format!("{label}{name}"), &img, want, tol);
     }
 }
+
+/// The tiny SD 1.5 + ControlNet with the VAE encoder (image-to-image, inpainting), f32 on the CPU.
+pub fn tiny_pipeline_with_encoder() -> gait_diffuse::ControlnetPipeline {
+    gait_diffuse::ControlnetPipeline::load_with_encoder(
+        &tiny(),
+        &tiny().join("controlnet"),
+        DType::F32,
+        &Device::Cpu,
+    )
+    .unwrap()
+}

@@ -21,13 +21,7 @@ use gait_diffuse::{
 const TOL: f64 = 1e-4;
 
 fn pipeline() -> ControlnetPipeline {
-    ControlnetPipeline::load_with_encoder(
-        &tiny(),
-        &tiny().join("controlnet"),
-        DType::F32,
-        &Device::Cpu,
-    )
-    .unwrap()
+    common::tiny_pipeline_with_encoder()
 }
 
 /// The frame as diffusers preprocesses it: CHW in [-1, 1].

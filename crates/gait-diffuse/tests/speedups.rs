@@ -8,21 +8,15 @@
 
 mod common;
 
-use candle_core::{DType, Device, Tensor};
-use common::{assert_close, fixtures, modes, modes_control, paper_context, rel_err, tiny};
+use candle_core::{Device, Tensor};
+use common::{assert_close, fixtures, modes, modes_control, paper_context, rel_err};
 use gait_diffuse::{ControlnetPipeline, Cutoffs, DenoiseParams, Savings, SchedulerKind};
 use serde_json::Value;
 
 const TOL: f64 = 1e-4;
 
 fn pipeline() -> ControlnetPipeline {
-    ControlnetPipeline::load_with_encoder(
-        &tiny(),
-        &tiny().join("controlnet"),
-        DType::F32,
-        &Device::Cpu,
-    )
-    .unwrap()
+    common::tiny_pipeline_with_encoder()
 }
 
 fn cases() -> Vec<Value> {
