@@ -149,10 +149,30 @@ fn unknown_stage_kind_lists_the_choices() {
     );
 }
 
+/// `gait run --config configs/<config> --set <set>` fails with every word of
+/// its case in one line, and writes nothing.
+fn each_set_fails(config: &str, cases: &[(&str, &[&str])]) {
+    let dir = tempfile::tempdir().unwrap();
+    let config = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../configs")
+        .join(config);
+    for (set, words) in cases {
+        fails_with(
+            gait()
+                .args(["run", "--no-progress", "--config"])
+                .arg(&config)
+                .args(["--set", set, "--input"])
+                .arg(common::sample_video())
+                .arg("--out")
+                .arg(dir.path().join("out")),
+            words,
+        );
+        assert_no_results(&dir.path().join("out"));
+    }
+}
+
 #[test]
 fn speed_settings_out_of_range_name_the_key() {
-    let dir = tempfile::tempdir().unwrap();
-    let fast = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/zero-shot-fast.toml");
     let cases: [(&str, &[&str]); 4] = [
         (
             "regenerator.guidance_end=1.5",
@@ -171,25 +191,11 @@ fn speed_settings_out_of_range_name_the_key() {
             &["control_guidance_end = -1"],
         ),
     ];
-    for (set, words) in cases {
-        fails_with(
-            gait()
-                .args(["run", "--no-progress", "--config"])
-                .arg(&fast)
-                .args(["--set", set, "--input"])
-                .arg(common::sample_video())
-                .arg("--out")
-                .arg(dir.path().join("out")),
-            words,
-        );
-        assert_no_results(&dir.path().join("out"));
-    }
+    each_set_fails("zero-shot-fast.toml", &cases);
 }
 
 #[test]
 fn cpu_settings_out_of_range_name_the_key() {
-    let dir = tempfile::tempdir().unwrap();
-    let cpu = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/zero-shot-cpu.toml");
     let cases: [(&str, &[&str]); 11] = [
         (
             "regenerator.cache_interval=0",
@@ -233,19 +239,7 @@ fn cpu_settings_out_of_range_name_the_key() {
             &["cache_interval", "backend = \"candle\""],
         ),
     ];
-    for (set, words) in cases {
-        fails_with(
-            gait()
-                .args(["run", "--no-progress", "--config"])
-                .arg(&cpu)
-                .args(["--set", set, "--input"])
-                .arg(common::sample_video())
-                .arg("--out")
-                .arg(dir.path().join("out")),
-            words,
-        );
-        assert_no_results(&dir.path().join("out"));
-    }
+    each_set_fails("zero-shot-cpu.toml", &cases);
 }
 
 #[test]
