@@ -141,7 +141,10 @@ impl MergePlan {
                 unmerge[row + t] = (out + unm + j) as u32;
             }
         }
-        let u32s = |v: Vec<u32>| Tensor::from_vec(v.clone(), v.len(), dev);
+        let u32s = |v: Vec<u32>| {
+            let n = v.len();
+            Tensor::from_vec(v, n, dev)
+        };
         let nd = counts.len();
         Ok(Self {
             keep: u32s(keep)?,
