@@ -18,6 +18,9 @@ pub enum StageError {
     /// A GPU was asked for (`[run] device`) in a build without CUDA.
     #[error(transparent)]
     NoCuda(#[from] crate::NoCudaSupport),
+    /// A stage written outside gait (in Python) failed or returned bad data.
+    #[error("{stage}: {reason}")]
+    External { stage: String, reason: String },
     #[error("{context}: {source}")]
     Io {
         context: String,

@@ -22,6 +22,7 @@ pub mod openpose_layout;
 mod person;
 pub mod pickle_guard;
 mod pose;
+pub mod pose_layout;
 mod stage;
 
 pub use backend::Backend;

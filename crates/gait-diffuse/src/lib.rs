@@ -68,6 +68,8 @@ pub enum RegeneratorConfig {
     Controlnet(ControlnetConfig),
     /// An external regenerator loaded from a shared library (see docs/adding-a-stage.md).
     Plugin(gait_plugin::PluginConfig),
+    /// A regenerator written in Python (see docs/adding-a-stage.md).
+    Python(gait_python::PythonStageConfig),
 }
 
 impl RegeneratorConfig {
@@ -76,6 +78,7 @@ impl RegeneratorConfig {
             RegeneratorConfig::Passthrough => Ok(Box::new(Passthrough)),
             RegeneratorConfig::Controlnet(c) => Ok(Box::new(ControlnetRegenerator::new(c, ctx)?)),
             RegeneratorConfig::Plugin(p) => Ok(gait_plugin::load_regenerator(p, ctx)?),
+            RegeneratorConfig::Python(p) => gait_python::load_regenerator(p, ctx),
         }
     }
 
@@ -85,7 +88,7 @@ impl RegeneratorConfig {
             RegeneratorConfig::Passthrough => false,
             RegeneratorConfig::Controlnet(_) => true,
             // The plugin ABI cannot declare it; plugins get edges when [edge] makes them.
-            RegeneratorConfig::Plugin(_) => false,
+            RegeneratorConfig::Plugin(_) | RegeneratorConfig::Python(_) => false,
         }
     }
 
@@ -135,6 +138,7 @@ impl RegeneratorConfig {
                 }
             },
             RegeneratorConfig::Plugin(p) => vec![p.resolved_path()],
+            RegeneratorConfig::Python(p) => p.module_file().into_iter().collect(),
         }
     }
 }

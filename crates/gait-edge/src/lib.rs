@@ -37,6 +37,8 @@ pub enum EdgeConfig {
     Hed(HedConfig),
     /// An external detector loaded from a shared library (see docs/adding-a-stage.md).
     Plugin(gait_plugin::PluginConfig),
+    /// A detector written in Python (see docs/adding-a-stage.md).
+    Python(gait_python::PythonStageConfig),
 }
 
 impl EdgeConfig {
@@ -50,6 +52,7 @@ impl EdgeConfig {
             }
             EdgeConfig::Hed(c) => Ok(Some(Box::new(c.build(ctx)?))),
             EdgeConfig::Plugin(p) => Ok(Some(gait_plugin::load_edge_detector(p, ctx)?)),
+            EdgeConfig::Python(p) => Ok(Some(gait_python::load_edge_detector(p, ctx)?)),
         }
     }
 
@@ -62,6 +65,7 @@ impl EdgeConfig {
                 .chain(c.mask_settings().model_path(ctx))
                 .collect(),
             EdgeConfig::Plugin(p) => vec![p.resolved_path()],
+            EdgeConfig::Python(p) => p.module_file().into_iter().collect(),
         }
     }
 }

@@ -314,7 +314,12 @@ fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), PipelineError> {
             .as_table_mut()
             .ok_or_else(|| PipelineError::config(&origin, format!("`{key}` is not a table")))?;
     }
-    node.insert(keys[keys.len() - 1].to_string(), value);
+    let last = keys[keys.len() - 1];
+    // Another `kind` is another stage: the old one's keys would not apply to it.
+    if last == "kind" && keys.len() == 2 && node.get("kind") != Some(&value) {
+        node.clear();
+    }
+    node.insert(last.to_string(), value);
     Ok(())
 }
 
@@ -325,6 +330,22 @@ fn one_line(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn setting_another_kind_drops_the_old_kinds_keys() {
+        let text = "[pose]\nkind = \"blazepose\"\nbackend = \"ort\"\n";
+        let c = load_str(text, &["pose.kind=python", "pose.module=m", "pose.class=C"]).unwrap();
+        assert!(
+            matches!(c.pose, gait_pose::PoseConfig::Python(_)),
+            "{:?}",
+            c.pose
+        );
+        let c = load_str(text, &["pose.kind=blazepose"]).unwrap();
+        let gait_pose::PoseConfig::Blazepose(b) = c.pose else {
+            panic!("{:?}", c.pose)
+        };
+        assert_eq!(b.backend, gait_core::Backend::Ort);
+    }
 
     fn load_str(text: &str, sets: &[&str]) -> Result<PipelineConfig, PipelineError> {
         let mut t = parse_toml("test", text)?;

@@ -71,18 +71,18 @@ fn placements(config: &PipelineConfig) -> [Placement; 3] {
     };
     let edge = match &config.edge {
         E::Hed(c) => on(true, c.backend == Candle),
-        E::Plugin(_) => on(true, false),
+        E::Plugin(_) | E::Python(_) => on(true, false),
         _ => on(false, false),
     };
     let regenerator = match &config.regenerator {
         R::Controlnet(c) => on(true, c.backend == Candle),
-        R::Plugin(_) => on(true, false),
+        R::Plugin(_) | R::Python(_) => on(true, false),
         R::Passthrough => on(false, false),
     };
     let pose = match &config.pose {
         P::Blazepose(c) => on(c.backend != Candle, false),
         P::Openpose(c) => on(true, c.backend == Candle),
-        P::Plugin(_) => on(true, false),
+        P::Plugin(_) | P::Python(_) => on(true, false),
     };
     [edge, regenerator, pose]
 }

@@ -22,6 +22,8 @@ pub enum PoseConfig {
     Openpose(openpose::OpenposeConfig),
     /// An external estimator loaded from a shared library (see docs/adding-a-stage.md).
     Plugin(gait_plugin::PluginConfig),
+    /// An estimator written in Python (see docs/adding-a-stage.md).
+    Python(gait_python::PythonStageConfig),
 }
 
 impl PoseConfig {
@@ -30,6 +32,7 @@ impl PoseConfig {
             PoseConfig::Blazepose(c) => c.build(ctx),
             PoseConfig::Openpose(c) => c.build(ctx),
             PoseConfig::Plugin(p) => gait_plugin::load_pose_estimator(p, ctx),
+            PoseConfig::Python(p) => gait_python::load_pose_estimator(p, ctx),
         }
     }
 
@@ -38,7 +41,7 @@ impl PoseConfig {
         match self {
             PoseConfig::Blazepose(c) => c.person,
             PoseConfig::Openpose(c) => c.person,
-            PoseConfig::Plugin(_) => PersonChoice::default(),
+            PoseConfig::Plugin(_) | PoseConfig::Python(_) => PersonChoice::default(),
         }
     }
 
@@ -48,6 +51,7 @@ impl PoseConfig {
             PoseConfig::Blazepose(c) => c.model_files(ctx),
             PoseConfig::Openpose(c) => c.model_files(ctx),
             PoseConfig::Plugin(p) => vec![p.resolved_path()],
+            PoseConfig::Python(p) => p.module_file().into_iter().collect(),
         }
     }
 }

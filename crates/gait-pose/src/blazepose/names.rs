@@ -1,64 +1,16 @@
 //! BlazePose's 33 landmark names and their mapping to the canonical keypoints.
 
-use gait_core::{CANONICAL, Keypoint};
+use gait_core::Keypoint;
+use gait_core::pose_layout::PoseLayout;
 
 use super::landmarks::Landmark;
 
 /// Native landmark names, in model order.
-pub const NATIVE: [&str; 33] = [
-    "nose",
-    "left_eye_inner",
-    "left_eye",
-    "left_eye_outer",
-    "right_eye_inner",
-    "right_eye",
-    "right_eye_outer",
-    "left_ear",
-    "right_ear",
-    "mouth_left",
-    "mouth_right",
-    "left_shoulder",
-    "right_shoulder",
-    "left_elbow",
-    "right_elbow",
-    "left_wrist",
-    "right_wrist",
-    "left_pinky",
-    "right_pinky",
-    "left_index",
-    "right_index",
-    "left_thumb",
-    "right_thumb",
-    "left_hip",
-    "right_hip",
-    "left_knee",
-    "right_knee",
-    "left_ankle",
-    "right_ankle",
-    "left_heel",
-    "right_heel",
-    "left_foot_index",
-    "right_foot_index",
-];
-
-/// Source of each canonical keypoint: one landmark or the midpoint of two.
-fn source(name: &str) -> (usize, Option<usize>) {
-    match name {
-        "neck" => (11, Some(12)),
-        "mid_hip" => (23, Some(24)),
-        "left_toe" => (31, None),
-        "right_toe" => (32, None),
-        other => (NATIVE.iter().position(|n| *n == other).unwrap_or(0), None),
-    }
-}
+pub use gait_core::pose_layout::BLAZEPOSE_33 as NATIVE;
 
 /// Output names: the canonical ones, then `bp_<native>` for all 33.
 pub fn keypoint_names() -> Vec<String> {
-    CANONICAL
-        .iter()
-        .map(|s| s.to_string())
-        .chain(NATIVE.iter().map(|n| format!("bp_{n}")))
-        .collect()
+    PoseLayout::Blazepose33.names()
 }
 
 /// Keypoints in frame pixels (pixel centre = integer) from the 33 normalised
@@ -72,18 +24,7 @@ pub fn to_keypoints(lm: &[Landmark], width: u32, height: u32) -> Vec<Keypoint> {
         )
     };
     let native: Vec<Keypoint> = lm.iter().take(33).map(px).collect();
-    let canonical = CANONICAL.iter().map(|name| {
-        let (a, b) = source(name);
-        match b {
-            None => native[a],
-            Some(b) => Keypoint::new(
-                (native[a].x + native[b].x) / 2.0,
-                (native[a].y + native[b].y) / 2.0,
-                native[a].likelihood.min(native[b].likelihood),
-            ),
-        }
-    });
-    canonical.chain(native.iter().copied()).collect()
+    PoseLayout::Blazepose33.to_keypoints(&native)
 }
 
 #[cfg(test)]
@@ -91,14 +32,16 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_canonical_name_has_a_source() {
-        for name in CANONICAL {
-            let (a, b) = source(name);
-            assert!(
-                NATIVE[a] == name || b.is_some() || name.ends_with("_toe"),
-                "{name}"
-            );
-        }
+    fn every_canonical_name_is_found() {
+        let lm = vec![
+            Landmark {
+                x: 0.5,
+                y: 0.5,
+                visibility: 0.9
+            };
+            33
+        ];
+        assert!(to_keypoints(&lm, 10, 10).iter().all(|k| k.is_found()));
         assert_eq!(keypoint_names().len(), 15 + 33);
         assert_eq!(keypoint_names()[15], "bp_nose");
     }

@@ -1,17 +1,14 @@
 //! OpenPose keypoints mapped to the canonical names.
 
-use gait_core::{CANONICAL, Keypoint};
+use gait_core::Keypoint;
+use gait_core::pose_layout::{to_canonical, with_native_names};
 
 use super::OpenposeModel;
 
 /// Output names: the canonical ones, then `op_<name>` for every keypoint of
 /// the model in its own order.
 pub fn keypoint_names(model: OpenposeModel) -> Vec<String> {
-    CANONICAL
-        .iter()
-        .map(|s| s.to_string())
-        .chain(model.keypoints().iter().map(|n| format!("op_{n}")))
-        .collect()
+    with_native_names(model.keypoints(), "op_")
 }
 
 /// Keypoints in output order from the model-order detections of one person
@@ -26,28 +23,7 @@ pub fn to_keypoints(model: OpenposeModel, found: &[Option<[f32; 3]>]) -> Vec<Key
             None => Keypoint::missing(),
         })
         .collect();
-    let index = |name: &str| layout.iter().position(|n| *n == name);
-    let canonical = CANONICAL.iter().map(|&name| match index(name) {
-        Some(i) => native[i],
-        None if name == "mid_hip" => match (index("left_hip"), index("right_hip")) {
-            (Some(l), Some(r)) => midpoint(native[l], native[r]),
-            _ => Keypoint::missing(),
-        },
-        None => Keypoint::missing(),
-    });
-    canonical.chain(native.iter().copied()).collect()
-}
-
-/// Midpoint of two keypoints, missing unless both are present.
-fn midpoint(a: Keypoint, b: Keypoint) -> Keypoint {
-    if !a.is_found() || !b.is_found() {
-        return Keypoint::missing();
-    }
-    Keypoint::new(
-        (a.x + b.x) / 2.0,
-        (a.y + b.y) / 2.0,
-        a.likelihood.min(b.likelihood),
-    )
+    to_canonical(layout, &native, &[])
 }
 
 #[cfg(test)]

@@ -1,0 +1,292 @@
+//! The stage objects: each wraps one Python instance and implements the
+//! matching gait-core stage trait.
+
+use gait_core::pose_layout::PoseLayout;
+use gait_core::{
+    EdgeDetector, EdgeMap, Frame, ImageRegenerator, Keypoint, Pose, PoseEstimator, Resize,
+    StageContext, StageError,
+};
+use image::{GrayImage, RgbImage};
+use pyo3::prelude::*;
+
+use crate::frames::Views;
+use crate::interpreter::{self, describe};
+use crate::{PythonStageConfig, PythonStageError, output};
+
+/// Loads a `[pose] kind = "python"` stage; its keypoint layout is read and checked once, here.
+pub fn load_pose_estimator(
+    cfg: &PythonStageConfig,
+    _ctx: &StageContext,
+) -> Result<Box<dyn PoseEstimator>, StageError> {
+    let stage = Stage::load(cfg, Family::POSE)?;
+    let layout = Python::attach(|py| {
+        let found: String = stage
+            .object
+            .bind(py)
+            .getattr("keypoints")
+            .and_then(|k| k.extract())
+            .unwrap_or_default();
+        PoseLayout::parse(&found).ok_or_else(|| PythonStageError::Layout {
+            found,
+            known: PoseLayout::ALL.map(|(n, _)| format!("\"{n}\"")).join(", "),
+        })
+    })
+    .map_err(|e| e.at(&stage.label))?;
+    Ok(Box::new(PythonPose {
+        names: layout.names(),
+        layout,
+        stage,
+    }))
+}
+
+/// Loads an `[edge] kind = "python"` stage.
+pub fn load_edge_detector(
+    cfg: &PythonStageConfig,
+    _ctx: &StageContext,
+) -> Result<Box<dyn EdgeDetector>, StageError> {
+    Ok(Box::new(PythonEdge {
+        stage: Stage::load(cfg, Family::EDGE)?,
+    }))
+}
+
+/// Loads a `[regenerator] kind = "python"` stage.
+pub fn load_regenerator(
+    cfg: &PythonStageConfig,
+    _ctx: &StageContext,
+) -> Result<Box<dyn ImageRegenerator>, StageError> {
+    Ok(Box::new(PythonRegenerator {
+        stage: Stage::load(cfg, Family::REGENERATOR)?,
+    }))
+}
+
+/// What a stage family's class must define.
+struct Family {
+    name: &'static str,
+    method: &'static str,
+    /// The method's second argument is the edge maps (or None).
+    takes_edges: bool,
+    signature: &'static str,
+}
+
+impl Family {
+    const POSE: Family = Family {
+        name: "pose",
+        method: "estimate",
+        takes_edges: false,
+        signature: "`keypoints = \"blazepose33\"` (or \"coco17\", \"coco18\") and `estimate(self, frames)`",
+    };
+    const EDGE: Family = Family {
+        name: "edge",
+        method: "detect",
+        takes_edges: false,
+        signature: "`detect(self, frames)`",
+    };
+    const REGENERATOR: Family = Family {
+        name: "regenerator",
+        method: "regenerate",
+        takes_edges: true,
+        signature: "`regenerate(self, frames, edges)`",
+    };
+}
+
+/// One Python stage object and numpy, which its arrays come from.
+struct Stage {
+    label: String,
+    method: &'static str,
+    takes_edges: bool,
+    object: Py<PyAny>,
+    numpy: Py<PyModule>,
+}
+
+impl Stage {
+    fn load(cfg: &PythonStageConfig, family: Family) -> Result<Self, StageError> {
+        interpreter::ensure();
+        let label = cfg.label();
+        Python::attach(|py| {
+            let numpy = interpreter::numpy(py)?;
+            let object = interpreter::instantiate(py, cfg)?;
+            if !object.hasattr(family.method).unwrap_or(false) {
+                return Err(PythonStageError::NoMethod {
+                    method: family.method,
+                    family: family.name,
+                    wanted: family.signature,
+                });
+            }
+            Ok(Self {
+                label: label.clone(),
+                method: family.method,
+                takes_edges: family.takes_edges,
+                object: object.unbind(),
+                numpy: numpy.unbind(),
+            })
+        })
+        .map_err(|e| e.at(&label))
+    }
+
+    /// Calls the stage's method on numpy views of `frames` (and `edges`),
+    /// then `read`s the result into owned values before the views go.
+    fn call<T>(
+        &self,
+        frames: &[Frame],
+        edges: Option<&[EdgeMap]>,
+        read: impl for<'py> FnOnce(
+            &Bound<'py, PyModule>,
+            &Bound<'py, PyAny>,
+        ) -> Result<T, (usize, String)>,
+    ) -> Result<T, StageError> {
+        let first = frames.first().map_or(0, |f| f.index);
+        let method = self.method;
+        Python::attach(|py| {
+            let np = self.numpy.bind(py);
+            let raised = |e: PyErr| PythonStageError::Raised {
+                method,
+                frame: first,
+                reason: describe(py, &e),
+            };
+            let views = Views::rgb(np, frames).map_err(raised)?;
+            let edge_views = edges
+                .map(|e| Views::gray(np, e))
+                .transpose()
+                .map_err(raised)?;
+            let edge_arg = edge_views
+                .as_ref()
+                .map_or_else(|| py.None().into_bound(py), |v| v.list.clone().into_any());
+            let object = self.object.bind(py);
+            let called = if self.takes_edges {
+                object.call_method1(method, (&views.list, edge_arg))
+            } else {
+                object.call_method1(method, (&views.list,))
+            };
+            let result = called.map_err(raised).and_then(|r| {
+                read(np, &r).map_err(|(frame, reason)| PythonStageError::Malformed {
+                    method,
+                    frame,
+                    reason,
+                })
+            });
+            let kept = !views.release() | !edge_views.is_none_or(|v| v.release());
+            match result {
+                Ok(_) if kept => Err(PythonStageError::KeptFrame {
+                    method,
+                    frame: first,
+                }),
+                other => other,
+            }
+        })
+        .map_err(|e| e.at(&self.label))
+    }
+
+    /// Calls an optional method without arguments, if the class has it.
+    fn call_optional(&self, name: &str) {
+        Python::attach(|py| {
+            let object = self.object.bind(py);
+            if object.hasattr(name).unwrap_or(false) {
+                // A failing reset shows up at the next call, which names the frame.
+                let _ = object.call_method0(name);
+            }
+        })
+    }
+}
+
+struct PythonPose {
+    stage: Stage,
+    layout: PoseLayout,
+    names: Vec<String>,
+}
+
+impl PoseEstimator for PythonPose {
+    fn keypoint_names(&self) -> Vec<String> {
+        self.names.clone()
+    }
+
+    fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError> {
+        let k = self.layout.native().len();
+        let (layout, n) = (self.layout, self.names.len());
+        self.stage.call(frames, None, |np, result| {
+            let items = output::items(result, frames.len()).map_err(|r| (first(frames), r))?;
+            items
+                .iter()
+                .zip(frames)
+                .map(|(item, frame)| {
+                    let rows = output::keypoints(np, item, k).map_err(|r| (frame.index, r))?;
+                    Ok(match rows {
+                        None => Pose::empty(n),
+                        Some(rows) => {
+                            let native: Vec<Keypoint> = rows
+                                .iter()
+                                .map(|[x, y, c]| Keypoint::new(*x, *y, *c))
+                                .collect();
+                            Pose {
+                                keypoints: layout.to_keypoints(&native),
+                            }
+                        }
+                    })
+                })
+                .collect()
+        })
+    }
+
+    fn reset(&mut self) {
+        self.stage.call_optional("reset");
+    }
+}
+
+struct PythonEdge {
+    stage: Stage,
+}
+
+impl EdgeDetector for PythonEdge {
+    fn detect(&mut self, frames: &[Frame]) -> Result<Vec<EdgeMap>, StageError> {
+        self.stage.call(frames, None, |np, result| {
+            let items = output::items(result, frames.len()).map_err(|r| (first(frames), r))?;
+            items
+                .iter()
+                .zip(frames)
+                .map(|(item, frame)| {
+                    let (w, h) = (frame.width(), frame.height());
+                    let pixels = output::image(np, item, &[h as usize, w as usize])
+                        .map_err(|r| (frame.index, r))?;
+                    let image = GrayImage::from_raw(w, h, pixels)
+                        .ok_or((frame.index, "wrong number of pixels".to_string()))?;
+                    Ok(EdgeMap {
+                        index: frame.index,
+                        image,
+                        resize: Resize::identity(w, h),
+                    })
+                })
+                .collect()
+        })
+    }
+}
+
+struct PythonRegenerator {
+    stage: Stage,
+}
+
+impl ImageRegenerator for PythonRegenerator {
+    fn regenerate(
+        &mut self,
+        frames: &[Frame],
+        edges: Option<&[EdgeMap]>,
+    ) -> Result<Vec<Frame>, StageError> {
+        self.stage.call(frames, edges, |np, result| {
+            let items = output::items(result, frames.len()).map_err(|r| (first(frames), r))?;
+            items
+                .iter()
+                .zip(frames)
+                .map(|(item, frame)| {
+                    let (w, h) = (frame.width(), frame.height());
+                    let pixels = output::image(np, item, &[h as usize, w as usize, 3])
+                        .map_err(|r| (frame.index, r))?;
+                    let image = RgbImage::from_raw(w, h, pixels)
+                        .ok_or((frame.index, "wrong number of pixels".to_string()))?;
+                    Ok(Frame::new(frame.index, image))
+                })
+                .collect()
+        })
+    }
+}
+
+fn first(frames: &[Frame]) -> usize {
+    frames.first().map_or(0, |f| f.index)
+}
