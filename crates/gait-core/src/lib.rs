@@ -24,6 +24,7 @@ pub mod pickle_guard;
 mod pose;
 pub mod pose_layout;
 mod stage;
+pub mod table;
 
 pub use backend::Backend;
 pub use context::StageContext;

@@ -61,7 +61,7 @@ pub use events::{Event, EventDetector, EventKind, ZeniRefined};
 pub use input_check::MAX_FRAME;
 use input_check::check_input;
 pub use likelihood::{KeypointGate, LikelihoodThreshold};
-pub use output::write_outputs;
+pub use output::{tables, write_outputs};
 pub use quality::{CycleQuality, Reason, SideCounts};
 pub use smooth::Smoother;
 pub use spatiotemporal::Param;

@@ -1,19 +1,13 @@
-//! The CSV files of `gait kin`, each written to a temporary name and renamed when complete.
+//! The CSV files of `gait kin` as tables (also what Python's DataFrames are
+//! made from), each written to a temporary name and renamed when complete.
 
 use std::fs;
 use std::io::Write;
 use std::path::Path;
 
-use crate::{KinError, KinResult};
+use gait_core::table::{Column, Table};
 
-/// Number cell: empty when undefined.
-fn num(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v:.6}")
-    } else {
-        String::new()
-    }
-}
+use crate::{KinError, KinResult};
 
 /// Writes `name` in `dir` through `dir/.name.partial`, so a crash never leaves a complete-looking file.
 fn atomic(
@@ -39,173 +33,167 @@ fn atomic(
     fs::rename(&tmp, &dst).map_err(io(format!("renaming to {}", dst.display())))
 }
 
+fn ints(values: impl IntoIterator<Item = usize>) -> Column {
+    Column::Int(values.into_iter().map(|v| v as i64).collect())
+}
+
+fn nums(values: impl IntoIterator<Item = f64>) -> Column {
+    Column::Num(values.into_iter().collect())
+}
+
+fn texts<S: ToString>(values: impl IntoIterator<Item = S>) -> Column {
+    Column::Text(values.into_iter().map(|v| v.to_string()).collect())
+}
+
+/// The tables of a result, named by their file: angles.csv, events.csv,
+/// bouts.csv, cycle_quality.csv, cycles.csv, cycles_all.csv (every accepted
+/// cycle) and spatiotemporal.csv.
+pub fn tables(r: &KinResult) -> Vec<(&'static str, Table)> {
+    vec![
+        ("angles.csv", angles(r)),
+        ("events.csv", events(r)),
+        ("bouts.csv", bouts(r)),
+        ("cycle_quality.csv", cycle_quality(r)),
+        ("cycles.csv", cycles(r)),
+        ("cycles_all.csv", cycles_all(r)),
+        ("spatiotemporal.csv", spatiotemporal(r)),
+    ]
+}
+
+fn angles(r: &KinResult) -> Table {
+    let a = &r.angles;
+    let frames: Vec<usize> = (0..a.left.hip.len()).map(|i| r.first_frame + i).collect();
+    Table::default()
+        .with("frame", ints(frames.iter().copied()))
+        .with("time_s", nums(frames.iter().map(|&f| f as f64 / r.fps)))
+        .with("left_hip", nums(a.left.hip.iter().copied()))
+        .with("right_hip", nums(a.right.hip.iter().copied()))
+        .with("left_knee", nums(a.left.knee.iter().copied()))
+        .with("right_knee", nums(a.right.knee.iter().copied()))
+        .with("left_ankle", nums(a.left.ankle.iter().copied()))
+        .with("right_ankle", nums(a.right.ankle.iter().copied()))
+}
+
+fn events(r: &KinResult) -> Table {
+    let e = &r.events;
+    Table::default()
+        .with("side", texts(e.iter().map(|e| e.side.name())))
+        .with("event", texts(e.iter().map(|e| e.event.name())))
+        .with("frame", ints(e.iter().map(|e| e.frame)))
+        .with("time_s", nums(e.iter().map(|e| e.frame as f64 / r.fps)))
+}
+
+fn bouts(r: &KinResult) -> Table {
+    let b = &r.bouts;
+    let direction = |d: crate::Direction| match d {
+        crate::Direction::Right => "right",
+        crate::Direction::Left => "left",
+        crate::Direction::Unknown => "unknown",
+    };
+    Table::default()
+        .with("bout", ints(0..b.len()))
+        .with("first", ints(b.iter().map(|b| b.first)))
+        .with("last", ints(b.iter().map(|b| b.last)))
+        .with("direction", texts(b.iter().map(|b| direction(b.direction))))
+        .with("mean_speed", nums(b.iter().map(|b| b.mean_speed)))
+}
+
+fn cycle_quality(r: &KinResult) -> Table {
+    let q = &r.cycle_quality;
+    let reasons = q.iter().map(|q| {
+        let names: Vec<&str> = q.reasons.iter().map(|r| r.name()).collect();
+        names.join(";")
+    });
+    Table::default()
+        .with("side", texts(q.iter().map(|q| q.side.name())))
+        .with("first_frame", ints(q.iter().map(|q| q.first_frame)))
+        .with("last_frame", ints(q.iter().map(|q| q.last_frame)))
+        .with(
+            "accepted",
+            Column::Bool(q.iter().map(|q| q.accepted).collect()),
+        )
+        .with("reasons", texts(reasons))
+        .with("stride_s", nums(q.iter().map(|q| q.stride_s)))
+        .with(
+            "stride_deviation",
+            nums(q.iter().map(|q| q.stride_deviation)),
+        )
+        .with("max_filled_s", nums(q.iter().map(|q| q.max_filled_s)))
+        .with("mean_likelihood", nums(q.iter().map(|q| q.mean_likelihood)))
+        .with("thigh_ratio", nums(q.iter().map(|q| q.thigh_ratio)))
+        .with("shank_ratio", nums(q.iter().map(|q| q.shank_ratio)))
+        .with("swapped_frames", ints(q.iter().map(|q| q.swapped_frames)))
+        .with(
+            "bout",
+            Column::OptInt(q.iter().map(|q| q.bout.map(|b| b as i64)).collect()),
+        )
+}
+
+/// One row per side, joint and percent of the mean cycle.
+fn cycles(r: &KinResult) -> Table {
+    let rows: Vec<(&crate::CycleCurve, usize)> = r
+        .cycles
+        .iter()
+        .flat_map(|c| (0..c.mean.len()).map(move |p| (c, p)))
+        .collect();
+    Table::default()
+        .with("side", texts(rows.iter().map(|(c, _)| c.side.name())))
+        .with("joint", texts(rows.iter().map(|(c, _)| &c.joint)))
+        .with("percent", ints(rows.iter().map(|(_, p)| *p)))
+        .with("mean", nums(rows.iter().map(|(c, p)| c.mean[*p])))
+        .with("sd", nums(rows.iter().map(|(c, p)| c.sd[*p])))
+        .with("n_cycles", ints(rows.iter().map(|(c, _)| c.n_cycles)))
+}
+
 /// One row per accepted stride, joint and percent of the cycle (input frame numbers).
-const CYCLES_ALL_HEADER: &str = "side,joint,first_frame,last_frame,percent,value";
-
-const CYCLE_QUALITY_HEADER: &str = "side,first_frame,last_frame,accepted,reasons,stride_s,\
-stride_deviation,max_filled_s,mean_likelihood,thigh_ratio,shank_ratio,swapped_frames,bout";
-
-fn cycle_quality_row(q: &crate::CycleQuality) -> String {
-    let reasons: Vec<&str> = q.reasons.iter().map(|r| r.name()).collect();
-    format!(
-        "{},{},{},{},{},{},{},{},{},{},{},{},{}",
-        q.side.name(),
-        q.first_frame,
-        q.last_frame,
-        q.accepted,
-        reasons.join(";"),
-        num(q.stride_s),
-        num(q.stride_deviation),
-        num(q.max_filled_s),
-        num(q.mean_likelihood),
-        num(q.thigh_ratio),
-        num(q.shank_ratio),
-        q.swapped_frames,
-        q.bout.map_or(String::new(), |b| b.to_string())
-    )
+fn cycles_all(r: &KinResult) -> Table {
+    let accepted = crate::quality::accepted(&r.cycle_quality);
+    let curves = crate::cycles::each(&r.angles, r.first_frame, &accepted);
+    let rows: Vec<(&_, usize, f64)> = curves
+        .iter()
+        .flat_map(|c| c.values.iter().enumerate().map(move |(p, v)| (c, p, *v)))
+        .collect();
+    Table::default()
+        .with(
+            "side",
+            texts(rows.iter().map(|(c, _, _)| c.stride.side.name())),
+        )
+        .with("joint", texts(rows.iter().map(|(c, _, _)| &c.joint)))
+        .with(
+            "first_frame",
+            ints(rows.iter().map(|(c, _, _)| c.stride.start)),
+        )
+        .with(
+            "last_frame",
+            ints(rows.iter().map(|(c, _, _)| c.stride.end)),
+        )
+        .with("percent", ints(rows.iter().map(|(_, p, _)| *p)))
+        .with("value", nums(rows.iter().map(|(_, _, v)| *v)))
 }
 
-fn lines(buf: &mut Vec<u8>, rows: impl IntoIterator<Item = String>) {
-    for r in rows {
-        buf.extend_from_slice(r.as_bytes());
-        buf.push(b'\n');
-    }
+fn spatiotemporal(r: &KinResult) -> Table {
+    let s = &r.spatiotemporal;
+    Table::default()
+        .with("parameter", texts(s.iter().map(|p| &p.parameter)))
+        .with("side", texts(s.iter().map(|p| &p.side)))
+        .with("mean", nums(s.iter().map(|p| p.mean)))
+        .with("sd", nums(s.iter().map(|p| p.sd)))
+        .with("n", ints(s.iter().map(|p| p.n)))
+        .with("unit", texts(s.iter().map(|p| &p.unit)))
 }
 
-/// Writes angles.csv, events.csv, bouts.csv, cycle_quality.csv, cycles.csv,
-/// cycles_all.csv (every accepted cycle), spatiotemporal.csv and keypoints_filtered.csv.
+/// Writes every table of [`tables`], then keypoints_filtered.csv.
 pub fn write_outputs(r: &KinResult, out_dir: &Path) -> Result<(), KinError> {
     fs::create_dir_all(out_dir).map_err(|e| KinError::Io {
         context: format!("creating {}", out_dir.display()),
         source: e,
     })?;
-    let fps = r.fps;
-    atomic(out_dir, "angles.csv", |b| {
-        let a = &r.angles;
-        lines(
-            b,
-            [
-                "frame,time_s,left_hip,right_hip,left_knee,right_knee,left_ankle,right_ankle"
-                    .to_string(),
-            ],
-        );
-        lines(
-            b,
-            (0..a.left.hip.len()).map(|i| {
-                let f = r.first_frame + i;
-                let cols = [
-                    &a.left.hip,
-                    &a.right.hip,
-                    &a.left.knee,
-                    &a.right.knee,
-                    &a.left.ankle,
-                    &a.right.ankle,
-                ];
-                let mut row = format!("{f},{}", num(f as f64 / fps));
-                for c in cols {
-                    row.push(',');
-                    row.push_str(&num(c[i]));
-                }
-                row
-            }),
-        );
-        Ok(())
-    })?;
-    atomic(out_dir, "events.csv", |b| {
-        lines(b, ["side,event,frame,time_s".to_string()]);
-        lines(
-            b,
-            r.events.iter().map(|e| {
-                format!(
-                    "{},{},{},{}",
-                    e.side.name(),
-                    e.event.name(),
-                    e.frame,
-                    num(e.frame as f64 / fps)
-                )
-            }),
-        );
-        Ok(())
-    })?;
-    atomic(out_dir, "bouts.csv", |b| {
-        lines(b, ["bout,first,last,direction,mean_speed".to_string()]);
-        lines(
-            b,
-            r.bouts.iter().enumerate().map(|(k, bout)| {
-                let dir = match bout.direction {
-                    crate::Direction::Right => "right",
-                    crate::Direction::Left => "left",
-                    crate::Direction::Unknown => "unknown",
-                };
-                let speed = num(bout.mean_speed);
-                format!("{k},{},{},{dir},{speed}", bout.first, bout.last)
-            }),
-        );
-        Ok(())
-    })?;
-    atomic(out_dir, "cycle_quality.csv", |b| {
-        lines(b, [CYCLE_QUALITY_HEADER.to_string()]);
-        lines(b, r.cycle_quality.iter().map(cycle_quality_row));
-        Ok(())
-    })?;
-    atomic(out_dir, "cycles.csv", |b| {
-        lines(b, ["side,joint,percent,mean,sd,n_cycles".to_string()]);
-        for c in &r.cycles {
-            lines(
-                b,
-                (0..c.mean.len()).map(|p| {
-                    format!(
-                        "{},{},{p},{},{},{}",
-                        c.side.name(),
-                        c.joint,
-                        num(c.mean[p]),
-                        num(c.sd[p]),
-                        c.n_cycles
-                    )
-                }),
-            );
-        }
-        Ok(())
-    })?;
-    atomic(out_dir, "cycles_all.csv", |b| {
-        lines(b, [CYCLES_ALL_HEADER.to_string()]);
-        let accepted = crate::quality::accepted(&r.cycle_quality);
-        for c in crate::cycles::each(&r.angles, r.first_frame, &accepted) {
-            let s = c.stride;
-            lines(
-                b,
-                c.values.iter().enumerate().map(|(p, v)| {
-                    format!(
-                        "{},{},{},{},{p},{}",
-                        s.side.name(),
-                        c.joint,
-                        s.start,
-                        s.end,
-                        num(*v)
-                    )
-                }),
-            );
-        }
-        Ok(())
-    })?;
-    atomic(out_dir, "spatiotemporal.csv", |b| {
-        lines(b, ["parameter,side,mean,sd,n,unit".to_string()]);
-        lines(
-            b,
-            r.spatiotemporal.iter().map(|p| {
-                format!(
-                    "{},{},{},{},{},{}",
-                    p.parameter,
-                    p.side,
-                    num(p.mean),
-                    num(p.sd),
-                    p.n,
-                    p.unit
-                )
-            }),
-        );
-        Ok(())
-    })?;
+    for (name, table) in tables(r) {
+        atomic(out_dir, name, |b| {
+            b.extend_from_slice(&table.to_csv());
+            Ok(())
+        })?;
+    }
     atomic(out_dir, "keypoints_filtered.csv", |b| {
         gait_core::dlc::write(&mut *b, "gait-kin", &r.filtered).map_err(|e| KinError::Io {
             context: "writing keypoints_filtered.csv".into(),

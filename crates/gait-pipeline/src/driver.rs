@@ -5,8 +5,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
+use crate::progress::Progress;
 use gait_core::{EdgeMap, Frame, PersonBox, Pose};
-use indicatif::ProgressBar;
 
 use crate::cache::StageCache;
 use crate::input::InputInfo;
@@ -322,7 +322,7 @@ impl Driver<'_> {
     pub(crate) fn stream(
         mut self,
         info: &InputInfo,
-        bar: &ProgressBar,
+        bar: &Progress,
         pick: &dyn Fn(usize, bool) -> bool,
     ) -> Result<PassResult, PipelineError> {
         let (first, last) = (self.config.input.first_frame, self.config.input.last_frame);
@@ -346,7 +346,7 @@ impl Driver<'_> {
                 continue;
             }
             let is_last = ahead.is_none();
-            bar.inc(1);
+            bar.tick()?;
             all.push(frame.index);
             if pick(frame.index, is_last) {
                 batch.push(frame);

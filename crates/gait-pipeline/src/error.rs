@@ -20,6 +20,9 @@ pub enum PipelineError {
     },
     #[error("cache {path}: {message}")]
     Cache { path: PathBuf, message: String },
+    /// The run was asked to stop (Ctrl-C in Python); the caches keep the frames done.
+    #[error("interrupted during {step}; the cache keeps the frames done, so a rerun resumes")]
+    Interrupted { step: String },
     /// The report, an export or the overlay video could not be written.
     #[error("writing {what}: {message}")]
     Output { what: String, message: String },

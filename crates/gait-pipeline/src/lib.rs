@@ -15,6 +15,7 @@ pub mod outputs;
 mod overlay;
 mod passes;
 mod plan;
+mod progress;
 mod redraw;
 pub mod registry;
 pub mod runner;
@@ -26,5 +27,8 @@ pub use config::PipelineConfig;
 pub use error::PipelineError;
 pub use outputs::{OutputOptions, Outputs, write_outputs};
 pub use overlay::regenerated_dir;
-pub use runner::{RunOptions, RunSummary, regenerate_part, run};
+pub use progress::RunHandle;
+pub use runner::{
+    RunOptions, RunSummary, default_models_dir, kin_and_write, regenerate_part, run, run_and_write,
+};
 pub use selection::{SelectionConfig, SelectionRecord};

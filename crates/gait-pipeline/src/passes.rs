@@ -5,8 +5,8 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use crate::progress::Progress;
 use gait_core::{PersonBox, Pose};
-use indicatif::ProgressBar;
 
 use crate::driver::{Caches, Driver, Order, PassResult};
 use crate::input::InputInfo;
@@ -65,7 +65,7 @@ pub(crate) struct Passes<'a> {
     /// Where the subject is in each frame; `None` without subject tracking.
     pub(crate) subject: Option<&'a BTreeMap<usize, PersonBox>>,
     /// Makes a progress bar for a pass named by its argument.
-    pub(crate) bar: &'a dyn Fn(&str) -> ProgressBar,
+    pub(crate) bar: &'a dyn Fn(&str) -> Progress,
 }
 
 impl Passes<'_> {

@@ -9,12 +9,12 @@ use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use gait_core::{Pose, PoseSequence, StageContext};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::input::InputInfo;
 use crate::manifest::{InputRecord, RunManifest, StageRecord};
 use crate::passes::{PassOutput, Passes};
 use crate::plan::{self, Models};
+use crate::progress::{Progress, RunHandle};
 use crate::registry;
 use crate::selection::{self, SelectionMode, SelectionRecord};
 use crate::subject::{self, Found};
@@ -30,6 +30,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// The command line, recorded in run.json.
     pub command: Vec<String>,
+    /// Kept by a front end that stops the run or draws its own progress.
+    pub handle: Option<RunHandle>,
 }
 
 /// What a finished run produced.
@@ -77,7 +79,7 @@ fn prepare(config: &PipelineConfig, opts: &RunOptions) -> Result<Prepared, Pipel
     let models = Models::new(config, &ctx, info.fingerprint()?);
     let root = plan::cache_root(config, &opts.out);
     let total = range_len(config, &info);
-    let bar = |pass: &str| progress_bar(opts.progress, total, pass);
+    let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
     let (subject, subject_record, warnings) =
         find_subject(config, &info, fps, &ctx, &models, root.as_deref(), &bar)?;
     let (caches, mut records) =
@@ -114,7 +116,7 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
         mut warnings,
     } = prepare(config, opts)?;
     let total = range_len(config, &info);
-    let bar = |pass: &str| progress_bar(opts.progress, total, pass);
+    let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
     let out = Passes {
         config,
         info: &info,
@@ -228,7 +230,7 @@ pub fn regenerate_part(
     }
     let mut p = prepare(config, opts)?;
     let total = range_len(config, &p.info);
-    let bar = |pass: &str| progress_bar(opts.progress, total, pass);
+    let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
     Passes {
         config,
         info: &p.info,
@@ -253,7 +255,7 @@ fn find_subject(
     ctx: &StageContext,
     models: &Models,
     root: Option<&Path>,
-    bar: &dyn Fn(&str) -> ProgressBar,
+    bar: &dyn Fn(&str) -> Progress,
 ) -> Result<SubjectPass, PipelineError> {
     let (cache, key) = plan::subject_cache(config, models, root)?;
     let kind = registry::stage_kinds(config)[2].1.clone();
@@ -399,19 +401,55 @@ fn write_csv(path: &Path, scorer: &str, seq: &PoseSequence) -> Result<(), Pipeli
     .map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))
 }
 
-fn progress_bar(enabled: bool, total: Option<usize>, pass: &str) -> ProgressBar {
-    if !enabled {
-        return ProgressBar::hidden();
+/// What `gait run` (and Python's `gait.run`) does once the config is
+/// resolved: the run, then the exports, overlay and report written from what
+/// the run wrote, so they show exactly the files a reader of the folder gets.
+pub fn run_and_write(
+    config: &PipelineConfig,
+    opts: &RunOptions,
+) -> Result<(RunSummary, crate::Outputs), PipelineError> {
+    let summary = run(config, opts)?;
+    let outputs = crate::write_outputs(&crate::OutputOptions {
+        dir: &opts.out,
+        input: Some(opts.input.as_path()),
+        config,
+        fps: None,
+        progress: opts.progress,
+    })?;
+    Ok((summary, outputs))
+}
+
+/// The models folder when none is given: `$GAIT_MODELS_DIR`, else the user
+/// cache (`$XDG_CACHE_HOME/gait/models`, `~/.cache/gait/models`).
+pub fn default_models_dir() -> PathBuf {
+    if let Some(dir) = std::env::var_os("GAIT_MODELS_DIR").filter(|d| !d.is_empty()) {
+        return PathBuf::from(dir);
     }
-    let bar = match total {
-        Some(n) => ProgressBar::with_draw_target(Some(n as u64), ProgressDrawTarget::stderr()),
-        None => ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr()),
-    };
-    let style = ProgressStyle::with_template(
-        "{spinner} [{elapsed_precise}] {msg} {wide_bar} {pos}/{len} frames {per_sec} ETA {eta}",
-    )
-    .unwrap_or_else(|_| ProgressStyle::default_bar());
-    bar.set_style(style);
-    bar.set_message(pass.to_string());
-    bar
+    let cache = std::env::var_os("XDG_CACHE_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+        .unwrap_or_else(|| PathBuf::from("."));
+    cache.join("gait").join("models")
+}
+
+/// What `gait kin` (and Python's `gait.kin`) does with keypoints: the
+/// kinematics written into `out`, then the exports, report and PDF (no
+/// overlay: there is no video).
+pub fn kin_and_write(
+    seq: &PoseSequence,
+    config: &PipelineConfig,
+    out: &Path,
+) -> Result<(gait_kin::KinResult, crate::Outputs), PipelineError> {
+    let result = gait_kin::analyse(seq, &config.postprocess, &config.kinematics)
+        .map_err(gait_core::StageError::from)?;
+    gait_kin::write_outputs(&result, out).map_err(gait_core::StageError::from)?;
+    let outputs = crate::write_outputs(&crate::OutputOptions {
+        dir: out,
+        input: None,
+        config,
+        fps: Some(seq.fps),
+        progress: false,
+    })?;
+    Ok((result, outputs))
 }

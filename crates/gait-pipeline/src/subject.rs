@@ -2,9 +2,9 @@
 //! estimator's detector, cached per frame), linked into tracks, one chosen
 //! (gait-subject). The pose passes then follow that track only.
 
+use crate::progress::Progress;
 use gait_core::{Frame, PoseEstimator};
 use gait_subject::{Appearance, Sighting, Subject};
-use indicatif::ProgressBar;
 use std::time::Instant;
 
 use crate::cache::StageCache;
@@ -31,7 +31,7 @@ pub(crate) fn find(
     workers: usize,
     cache: &StageCache,
     record: &mut StageRecord,
-    bar: &ProgressBar,
+    bar: &Progress,
 ) -> Result<Found, PipelineError> {
     if !config.subject.enabled {
         return Ok(Found::Off(None));
@@ -78,7 +78,7 @@ fn sightings(
     models: &mut [Box<dyn PoseEstimator>],
     cache: &StageCache,
     record: &mut StageRecord,
-    bar: &ProgressBar,
+    bar: &Progress,
 ) -> Result<Option<FramePeople>, PipelineError> {
     let (first, last) = (config.input.first_frame, config.input.last_frame);
     let mut reader = info.frames()?;
@@ -93,7 +93,7 @@ fn sightings(
                 if frame.index < first {
                     continue;
                 }
-                bar.inc(1);
+                bar.tick()?;
                 let seen = cache.load_json::<Vec<Sighting>>(frame.index);
                 record.cached += usize::from(seen.is_some());
                 out.push((frame.index, seen.clone()));

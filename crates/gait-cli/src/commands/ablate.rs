@@ -171,6 +171,7 @@ fn run_one(
         models_dir: models_dir.to_path_buf(),
         progress,
         command: std::env::args().collect(),
+        handle: None,
     };
     let summary = gait_pipeline::run(&config, &opts)?;
     Ok((config, summary))

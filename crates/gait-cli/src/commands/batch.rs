@@ -249,6 +249,7 @@ fn task(
         models_dir: models_dir.to_path_buf(),
         progress: false,
         command: std::env::args().collect(),
+        handle: None,
     };
     let result = match part {
         Some(p) => gait_pipeline::regenerate_part(&config, &opts, p, plan.split_frames)

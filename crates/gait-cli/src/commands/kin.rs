@@ -60,20 +60,10 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
             one_line(&e.to_string())
         ))
     })?;
-    let result = gait_kin::analyse(&seq, &config.postprocess, &config.kinematics)
-        .map_err(|e| CliError(one_line(&e.to_string())))?;
-    gait_kin::write_outputs(&result, &args.out).map_err(|e| CliError(one_line(&e.to_string())))?;
+    let (result, outputs) = gait_pipeline::kin_and_write(&seq, &config, &args.out)?;
     for w in &result.warnings {
         eprintln!("warning: {w}");
     }
-    // No video here: exports, report and PDF, but no overlay.
-    let outputs = gait_pipeline::write_outputs(&gait_pipeline::OutputOptions {
-        dir: &args.out,
-        input: None,
-        config: &config,
-        fps: Some(args.fps),
-        progress: false,
-    })?;
     for w in &outputs.warnings {
         eprintln!("warning: {w}");
     }

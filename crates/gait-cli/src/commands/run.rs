@@ -22,6 +22,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
         models_dir: models_dir.to_path_buf(),
         progress: !p.no_progress,
         command: std::env::args().collect(),
+        handle: None,
     };
     run_and_report(&config, &opts)
 }
@@ -29,22 +30,13 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
 /// What `gait run` does once the config is resolved: the run, then the report step, with the
 /// warnings and the closing line on stderr. `gait batch` runs each row through here.
 pub fn run_and_report(config: &PipelineConfig, opts: &RunOptions) -> Result<(), CliError> {
-    let summary = gait_pipeline::run(config, opts)?;
+    let (summary, outputs) = gait_pipeline::run_and_write(config, opts)?;
     for w in &summary.manifest.warnings {
         eprintln!("warning: {w}");
     }
     if !config.selection.is_default_flow() {
         eprintln!("{}", summary.manifest.selection.summary());
     }
-    // The report and exports read what the run wrote, so they show exactly
-    // the files a reader of the run folder gets.
-    let outputs = gait_pipeline::write_outputs(&gait_pipeline::OutputOptions {
-        dir: &opts.out,
-        input: Some(opts.input.as_path()),
-        config,
-        fps: None,
-        progress: opts.progress,
-    })?;
     for w in &outputs.warnings {
         eprintln!("warning: {w}");
     }
