@@ -13,6 +13,9 @@ bash tools/review/setup_puppeteer.sh >/dev/null
 eval "export $(bash tools/batch/slurm.sh up)"
 trap 'bash tools/batch/slurm.sh down' EXIT
 cargo test --workspace
+# The Python package (issue 31): its venv under target/, the wheel, pytest on the API, Python stages
+# (mediapipe's own BlazePose among them) and the example notebook.
+bash tools/python/test.sh
 # Every input parser under mutated real files for a bounded time (issue 21); a crash fails the
 # run, with its input saved under target/fuzz-crashes/ and printed in hex.
 cargo build -p gait-fuzz

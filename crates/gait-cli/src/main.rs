@@ -3,6 +3,7 @@
 mod commands;
 mod error;
 mod hub;
+mod interrupt;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -68,7 +69,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", error::one_line(&e.0));
-            ExitCode::from(2)
+            ExitCode::from(interrupt::exit_code().unwrap_or(2))
         }
     }
 }

@@ -109,7 +109,7 @@ impl Passes<'_> {
         let label = match (regenerate, self.config.selection.mode) {
             (false, _) => "original frames",
             (true, SelectionMode::Poor) => "regenerating poor frames",
-            (true, _) => "",
+            (true, _) => "poses",
         };
         let bar = (self.bar)(label);
         let (first, stride) = (self.config.input.first_frame, self.config.selection.stride);

@@ -100,10 +100,42 @@ fn prepare(config: &PipelineConfig, opts: &RunOptions) -> Result<Prepared, Pipel
 
 /// Runs the pipeline on `opts.input` and writes the run folder: the subject
 /// pass, the pose passes, the keypoints, then the kinematics.
+/// A run stopped by its handle leaves a run.json that says so, and where.
 pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, PipelineError> {
     let started_unix = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
+    run_from(config, opts, started_unix).inspect_err(|e| {
+        if let PipelineError::Interrupted { step } = e {
+            write_interrupted(config, opts, started_unix, step);
+        }
+    })
+}
+
+/// run.json of an interrupted run: what was being done, and how to repeat it
+/// (the rerun resumes from the cache).
+fn write_interrupted(config: &PipelineConfig, opts: &RunOptions, started_unix: u64, step: &str) {
+    let json = serde_json::json!({
+        "tool": "gait",
+        "version": env!("CARGO_PKG_VERSION"),
+        "status": "interrupted",
+        "interrupted_during": step,
+        "started_unix": started_unix,
+        "command": opts.command,
+        "input": { "path": opts.input },
+        "config": serde_json::to_value(config).unwrap_or_default(),
+    });
+    let path = opts.out.join("run.json");
+    // The interruption is what the caller reports; a folder that cannot take
+    // run.json has already said so, or will at the rerun.
+    let _ = atomic::write(&path, &serde_json::to_vec_pretty(&json).unwrap_or_default());
+}
+
+fn run_from(
+    config: &PipelineConfig,
+    opts: &RunOptions,
+    started_unix: u64,
+) -> Result<RunSummary, PipelineError> {
     let Prepared {
         info,
         fps,

@@ -22,8 +22,11 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
         models_dir: models_dir.to_path_buf(),
         progress: !p.no_progress,
         command: std::env::args().collect(),
-        handle: None,
+        handle: Some(gait_pipeline::RunHandle::default()),
     };
+    if let Some(h) = &opts.handle {
+        crate::interrupt::install(h);
+    }
     run_and_report(&config, &opts)
 }
 
