@@ -47,9 +47,14 @@ class Config:
         """The config in `path` (a pipeline TOML or a run's run.json); None: the default."""
         return cls(path)
 
-    def set(self, key, value):
-        """Overrides `key` ("table.key"), as `--set key=value`; returns the config."""
-        sets = self.sets + [f"{key}={toml_value(value)}"]
+    def set(self, key, value=None):
+        """Overrides `key` ("table.key"), as `--set key=value`; returns the config.
+
+        A dict sets several keys at once, checked together, e.g. a Python pose stage:
+        cfg.set({"pose.kind": "python", "pose.module": "m", "pose.class": "C"}).
+        """
+        changes = key.items() if isinstance(key, dict) else [(key, value)]
+        sets = self.sets + [f"{k}={toml_value(v)}" for k, v in changes]
         _gait.resolve_config(self.path, sets)
         self.sets = sets
         return self

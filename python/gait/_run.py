@@ -40,11 +40,12 @@ class Run:
     @property
     def manifest(self):
         """run.json as a dict (None for gait.kin, which has no run)."""
-        if self._data is not None:
-            text = self._data.get("manifest")
-            return None if text is None else json.loads(text)
+        # The file, not the run's own summary: the report step adds to it.
         path = self.dir / "run.json"
-        return json.loads(path.read_text()) if path.is_file() else None
+        if path.is_file():
+            return json.loads(path.read_text())
+        text = None if self._data is None else self._data.get("manifest")
+        return None if text is None else json.loads(text)
 
     @property
     def keypoints(self):

@@ -82,6 +82,10 @@ fn columns<'py>(py: Python<'py>, t: &Table) -> PyResult<Bound<'py, PyList>> {
         let (dtype, data): (&str, Bound<'py, PyAny>) = match column {
             Column::Int(v) => ("int64", raw(py, v, |x| x.to_ne_bytes()).into_any()),
             Column::Num(v) => ("float64", raw(py, v, |x| x.to_ne_bytes()).into_any()),
+            Column::OptInt(v) if v.iter().all(Option::is_some) => {
+                let i: Vec<i64> = v.iter().flatten().copied().collect();
+                ("int64", raw(py, &i, |x| x.to_ne_bytes()).into_any())
+            }
             // pandas reads an integer column with empty cells as float with NaN.
             Column::OptInt(v) => {
                 let f: Vec<f64> = v.iter().map(|x| x.map_or(f64::NAN, |x| x as f64)).collect();

@@ -1,0 +1,164 @@
+"""gait.run, gait.load, gait.kin and gait.Config against the `gait` command and the files it writes."""
+
+import json
+import pathlib
+import shutil
+
+import pandas as pd
+import pytest
+
+from conftest import (
+    ROOT,
+    SUBJECT_KEYPOINTS,
+    TABLES,
+    assert_frames_equal,
+    cli,
+    compare_run_dirs,
+    read_dlc,
+)
+
+
+def test_run_tables_equal_the_csv_files(clip_run):
+    run = clip_run
+    assert isinstance(run.dir, pathlib.Path) and run.dir.is_dir()
+    for name in TABLES:
+        table = getattr(run, name)
+        assert isinstance(table, pd.DataFrame), name
+        assert_frames_equal(table, pd.read_csv(run.dir / f"{name}.csv"), name)
+    assert list(run.angles.columns) == [
+        "frame", "time_s", "left_hip", "right_hip", "left_knee", "right_knee", "left_ankle",
+        "right_ankle",
+    ]
+    assert len(run.angles) == 60
+    assert_frames_equal(run.scores, pd.read_csv(run.dir / "scores.csv"), "scores")
+
+
+def test_run_keypoints_in_deeplabcut_layout(clip_run):
+    kp = clip_run.keypoints
+    assert list(kp.columns.names) == ["scorer", "bodyparts", "coords"]
+    assert list(kp.index) == list(range(60))
+    parts = list(dict.fromkeys(kp.columns.get_level_values("bodyparts")))
+    assert parts == clip_run.manifest["keypoint_names"]
+    assert parts[:3] == ["nose", "neck", "left_shoulder"]
+    assert set(kp.columns.get_level_values("coords")) == {"x", "y", "likelihood"}
+    assert_frames_equal(kp, read_dlc(clip_run.dir / "keypoints.csv"), "keypoints")
+
+
+def test_run_manifest_is_run_json(clip_run):
+    manifest = clip_run.manifest
+    assert manifest == json.loads((clip_run.dir / "run.json").read_text())
+    assert manifest["frames_processed"] == 60
+    assert manifest["config"]["input"]["last_frame"] == 59
+
+
+def test_load_gives_the_same_run(clip_run, gait):
+    loaded = gait.load(clip_run.dir)
+    assert loaded.dir == clip_run.dir
+    assert loaded.manifest == clip_run.manifest
+    for name in TABLES + ("scores",):
+        assert_frames_equal(getattr(loaded, name), getattr(clip_run, name), name)
+    assert_frames_equal(loaded.keypoints, clip_run.keypoints, "keypoints")
+    # A path given as a str works as well.
+    assert_frames_equal(gait.load(str(clip_run.dir)).angles, clip_run.angles, "angles")
+
+
+def test_run_writes_what_the_command_writes(clip_runs):
+    cli_dir, run = clip_runs
+    cli_names = sorted(p.name for p in cli_dir.iterdir() if p.is_file())
+    assert "keypoints.csv" in cli_names and "run.json" in cli_names
+    assert compare_run_dirs(cli_dir, run.dir) == []
+    # What run.json may differ in: how the run was started and how long it took.
+    from_cli = json.loads((cli_dir / "run.json").read_text())
+    assert from_cli["command"][1:3] == ["run", "--input"]
+    assert run.manifest["frames_from_cache"] == from_cli["frames_from_cache"] == 0
+
+
+def test_kin_on_the_runs_keypoints_gives_its_angles(clip_run, gait):
+    fps = clip_run.manifest["input"]["fps"]
+    kin = gait.kin(clip_run.keypoints, fps=fps)
+    assert_frames_equal(kin.angles, clip_run.angles, "angles")
+    # ... and from the CSV as pandas reads it.
+    kin_csv = gait.kin(read_dlc(clip_run.dir / "keypoints.csv"), fps=fps)
+    assert_frames_equal(kin_csv.angles, clip_run.angles, "angles from keypoints.csv")
+
+
+@pytest.mark.parametrize(
+    "keypoints_csv, fps, read",
+    [
+        # With walking bouts, events and accepted cycles: every table filled. Its first frame has
+        # no keypoint, which pd.read_csv(header=[0, 1, 2]) would take for index names.
+        (SUBJECT_KEYPOINTS, 30, read_dlc),
+        # As the docs say: pd.read_csv(path, header=[0, 1, 2], index_col=0).
+        (
+            ROOT / "tests" / "data" / "fukuchi2018" / "keypoints.csv",
+            150,
+            lambda path: pd.read_csv(path, header=[0, 1, 2], index_col=0),
+        ),
+    ],
+    ids=["sample-subject", "fukuchi2018"],
+)
+def test_kin_equals_the_kin_command(gait, tmp_path, keypoints_csv, fps, read):
+    """gait.kin on a DeepLabCut table writes the files `gait kin` writes, and its tables are theirs."""
+    # Each into the same folder path in turn: the report names its folder.
+    cli("kin", "--keypoints", keypoints_csv, "--fps", fps, "--out", tmp_path / "out")
+    shutil.move(str(tmp_path / "out"), str(tmp_path / "cli"))
+    run = gait.kin(read(keypoints_csv), fps=fps, out=tmp_path / "out")
+    assert run.dir == tmp_path / "out"
+    for name in TABLES:
+        table = getattr(run, name)
+        assert_frames_equal(table, pd.read_csv(run.dir / f"{name}.csv"), name)
+    assert compare_run_dirs(tmp_path / "cli", run.dir) == []
+    assert len(run.events) > 4
+    if keypoints_csv == SUBJECT_KEYPOINTS:
+        assert len(run.cycles) > 100 and set(run.cycles["side"]) == {"left", "right"}
+        assert run.cycle_quality["accepted"].dtype == bool
+
+
+def test_kin_takes_config_and_set(gait, tmp_path):
+    keypoints = read_dlc(SUBJECT_KEYPOINTS)
+    linear = gait.kin(keypoints, fps=30, set={"postprocess.filter": "none"})
+    cli(
+        "kin", "--keypoints", SUBJECT_KEYPOINTS, "--fps", "30", "--out", tmp_path / "cli",
+        "--set", 'postprocess.filter="none"',
+    )
+    assert_frames_equal(linear.angles, pd.read_csv(tmp_path / "cli" / "angles.csv"), "angles")
+    cfg = gait.Config.load().set("postprocess.filter", "none")
+    assert_frames_equal(gait.kin(keypoints, fps=30, config=cfg).angles, linear.angles, "angles")
+
+
+def test_config_load_set_to_toml(gait, clip_run):
+    default = gait.Config.load()
+    text = default.to_toml()
+    assert "[pose]" in text and 'backend = "candle"' in text
+    cfg = gait.Config.load()
+    assert cfg.set("pose.backend", "ort") is cfg
+    assert 'backend = "ort"' in cfg.to_toml()
+    assert 'backend = "ort"' not in gait.Config.load().to_toml()
+    # Values of every TOML kind.
+    cfg.set("input.last_frame", 59).set("postprocess.cutoff_hz", 5.5).set("run.cache", False)
+    text = cfg.to_toml()
+    assert "last_frame = 59" in text and "cutoff_hz = 5.5" in text and "cache = false" in text
+    # A config file, and a run's run.json (to repeat it).
+    zero_shot = gait.Config.load(ROOT / "configs" / "zero-shot-canny.toml").to_toml()
+    assert 'kind = "canny"' in zero_shot
+    again = gait.Config.load(clip_run.dir / "run.json").to_toml()
+    assert "last_frame = 59" in again
+
+
+def test_exceptions_are_exported(gait):
+    for name in ("ConfigError", "InputError", "StageError", "OutputError"):
+        cls = getattr(gait, name)
+        assert issubclass(cls, gait.GaitError) and cls is not gait.GaitError
+    assert issubclass(gait.GaitError, Exception)
+    assert isinstance(gait.__version__, str) and gait.__version__
+
+
+def test_config_sets_a_python_stage_in_one_call(gait):
+    # One key at a time could not be valid: a python stage needs module and class with its kind.
+    cfg = gait.Config.load().set(
+        {"pose.kind": "python", "pose.module": "gait_test_constant", "pose.class": "ConstantPose"}
+    )
+    text = cfg.to_toml()
+    assert 'kind = "python"' in text and 'module = "gait_test_constant"' in text
+    with pytest.raises(gait.ConfigError):
+        gait.Config.load().set("pose.kind", "python")
