@@ -10,6 +10,7 @@ use super::names;
 use super::net::{self, Net};
 use super::person;
 use super::roi::Roi;
+use super::roi_filter::{self, AuxFilter, RoiFilter};
 use super::warp::{self, Border};
 
 const NMS_IOU: f32 = 0.3;
@@ -23,6 +24,8 @@ pub struct Blazepose {
     config: BlazeposeConfig,
     /// Crop for the next frame, from this frame's landmarks 33/34.
     track: Option<Roi>,
+    /// The One-Euro filter on landmarks 33/34 (`roi_filter = "mediapipe"`).
+    aux_filter: AuxFilter,
     /// Centre of the last person found, to pick the same one on re-detection.
     last_centre: Option<(f32, f32)>,
 }
@@ -53,6 +56,7 @@ impl Blazepose {
             anchors: anchors(),
             config: config.clone(),
             track: None,
+            aux_filter: AuxFilter::default(),
             last_centre: None,
         })
     }
@@ -133,13 +137,14 @@ impl Blazepose {
         }
         let tracked = self.track.take().filter(|_| self.config.tracking);
         let mut result = self.present(frame, tracked)?;
+        let from_track = result.is_some();
         if result.is_none() {
             let dets = self.detect(frame)?;
             let last = self.last_centre.filter(|_| self.config.tracking);
             let roi = person::choose(&dets, self.config.person, last, w, h);
             result = self.present(frame, roi)?;
         }
-        Ok(self.accept(result, w, h))
+        Ok(self.accept(result, from_track, w, h))
     }
 
     /// The pose of the subject at `subject` in one frame: the tracked crop
@@ -159,6 +164,7 @@ impl Blazepose {
             .take()
             .filter(|roi| self.config.tracking && on_subject(roi, s, w, h));
         let mut result = self.present(frame, tracked)?;
+        let from_track = result.is_some();
         if result.is_none() {
             let (wf, hf) = (w as f32, h as f32);
             let roi = Roi::from_alignment(
@@ -169,7 +175,7 @@ impl Blazepose {
             );
             result = self.present(frame, Some(roi))?;
         }
-        Ok(self.accept(result, w, h))
+        Ok(self.accept(result, from_track, w, h))
     }
 
     /// The landmarks in the crop `roi`, if there is one and the model finds
@@ -187,19 +193,25 @@ impl Blazepose {
     }
 
     /// The pose from an accepted landmark result (or none), and the crop to
-    /// track from in the next frame.
-    fn accept(&mut self, result: Option<LandmarkResult>, w: u32, h: u32) -> Pose {
+    /// track from in the next frame. `from_track`: the result comes from the
+    /// crop tracked from the last frame (else from a new detection or the
+    /// subject's box, where mediapipe's filter on landmarks 33/34 starts
+    /// afresh: it resets on the frame without landmarks before every
+    /// detection).
+    fn accept(&mut self, result: Option<LandmarkResult>, from_track: bool, w: u32, h: u32) -> Pose {
         let Some(r) = result else {
             self.reset();
             return Pose::empty(names::keypoint_names().len());
         };
         let lm = &r.landmarks;
-        self.track = Some(Roi::from_alignment(
-            (lm[33].x, lm[33].y),
-            (lm[34].x, lm[34].y),
-            w,
-            h,
-        ));
+        let (mut p0, mut p1) = ((lm[33].x, lm[33].y), (lm[34].x, lm[34].y));
+        if self.config.roi_filter == RoiFilter::Mediapipe {
+            if !from_track {
+                self.aux_filter.reset();
+            }
+            [p0, p1] = self.aux_filter.apply(p0, p1, w, h);
+        }
+        self.track = Some(Roi::from_alignment(p0, p1, w, h));
         self.last_centre = Some((lm[33].x, lm[33].y));
         Pose {
             keypoints: names::to_keypoints(lm, w, h),
@@ -270,10 +282,13 @@ impl PoseEstimator for Blazepose {
 
     fn reset(&mut self) {
         self.track = None;
+        self.aux_filter.reset();
         self.last_centre = None;
     }
 
-    /// Little-endian f32s: presence flag + ROI (5 values), presence flag + centre (2).
+    /// Little-endian f32s: presence flag + ROI (5 values), presence flag +
+    /// centre (2), then the filter on landmarks 33/34 (started flag + 4 x 3
+    /// values: roi_filter::AuxFilter::to_values).
     fn state(&self) -> Option<Vec<u8>> {
         let roi = self
             .track
@@ -282,13 +297,16 @@ impl PoseEstimator for Blazepose {
         Some(
             roi.iter()
                 .chain(&centre)
+                .chain(&self.aux_filter.to_values())
                 .flat_map(|v| v.to_le_bytes())
                 .collect(),
         )
     }
 
+    /// Also takes the shorter state of before the filter (no filter state:
+    /// it starts afresh, as when `roi_filter = "none"`).
     fn restore(&mut self, state: &[u8]) -> bool {
-        if state.len() != 9 * 4 {
+        if state.len() != 9 * 4 && state.len() != (9 + roi_filter::STATE_LEN) * 4 {
             return false;
         }
         let v: Vec<f32> = state
@@ -303,6 +321,7 @@ impl PoseEstimator for Blazepose {
             rotation: v[5],
         });
         self.last_centre = (v[6] == 1.0).then_some((v[7], v[8]));
+        self.aux_filter = AuxFilter::from_values(&v[9..]);
         true
     }
 }

@@ -12,6 +12,7 @@ mod ort_net;
 mod person;
 mod perspective;
 mod roi;
+mod roi_filter;
 mod warp;
 
 use std::path::PathBuf;
@@ -23,6 +24,7 @@ pub use crate::person::PersonChoice;
 pub use estimator::Blazepose;
 pub use names::NATIVE;
 pub use net::{DETECTOR_FILE, LANDMARK_FILE};
+pub use roi_filter::{AuxFilter, RoiFilter};
 pub use warp::Border;
 
 /// Runs one network (`.tflite` file `model`, or its ONNX export for ort) on
@@ -67,6 +69,14 @@ pub struct BlazeposeConfig {
     /// Follow the person from the previous frame's landmarks instead of
     /// detecting in every frame (video mode); re-detects when presence drops.
     pub tracking: bool,
+    /// What the landmarks the tracked crop is built from go through first:
+    /// `"none"` (default: this frame's landmarks 33/34 as they are) or
+    /// `"mediapipe"` (the One-Euro filter mediapipe's video mode always runs
+    /// on them, even with `smooth_landmarks = false`: min_cutoff 0.01, beta
+    /// 10, derivate_cutoff 1, at the 30 fps clock of its Python API; restarted
+    /// with every detection), so tracking gives what `mp.solutions.pose.Pose`
+    /// gives. Only the crop is filtered, never the keypoints.
+    pub roi_filter: RoiFilter,
 }
 
 impl Default for BlazeposeConfig {
@@ -78,6 +88,7 @@ impl Default for BlazeposeConfig {
             detection_threshold: 0.5,
             presence_threshold: 0.5,
             tracking: true,
+            roi_filter: RoiFilter::None,
         }
     }
 }
@@ -117,6 +128,10 @@ mod tests {
         assert_eq!(c.person, PersonChoice::Rule(crate::PersonRule::MostCentral));
         assert!(!c.tracking);
         assert_eq!(c.detection_threshold, 0.5);
+        assert_eq!(c.roi_filter, RoiFilter::None);
+        let c: BlazeposeConfig = toml::from_str("roi_filter = \"mediapipe\"").unwrap();
+        assert_eq!(c.roi_filter, RoiFilter::Mediapipe);
+        assert!(toml::from_str::<BlazeposeConfig>("roi_filter = \"one_euro\"").is_err());
         let err = toml::from_str::<BlazeposeConfig>("persn = 1")
             .unwrap_err()
             .to_string();
