@@ -165,7 +165,7 @@ fn gait_run_on_mutated_configs() {
     let work = tempfile::tempdir().unwrap();
     let seed = repo().join("configs/default.toml");
     let mut codes = Vec::new();
-    for (k, file) in mutants(work.path(), &seed, 12, 4).iter().enumerate() {
+    for (k, file) in mutants(work.path(), &seed, 20, 4).iter().enumerate() {
         let out = work.path().join(format!("run-{k}"));
         codes.push(check(
             gait()
