@@ -116,30 +116,10 @@ fn interrupted_run_resumes_where_it_stopped() {
         .spawn()
         .unwrap();
     // Kill the run hard once a few frames are done.
-    let deadline = Instant::now() + Duration::from_secs(600);
-    let done = |out: &Path| -> usize {
-        std::fs::read_dir(out.join("cache"))
-            .into_iter()
-            .flatten()
-            .flatten()
-            .filter(|e| e.file_name().to_string_lossy().starts_with("pose-"))
-            .flat_map(|e| std::fs::read_dir(e.path()).into_iter().flatten().flatten())
-            .filter(|e| {
-                e.file_name().to_string_lossy().ends_with(".json") && e.file_name() != "config.json"
-            })
-            .count()
-    };
-    while done(&out) < 5 {
-        assert!(Instant::now() < deadline, "no progress");
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "the run ended before it could be interrupted"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_poses(&out, &mut child, 5);
     child.kill().unwrap();
     child.wait().unwrap();
-    let finished_before = done(&out);
+    let finished_before = cached_poses(&out);
     assert!(
         finished_before < 40,
         "the run finished before it was killed"
@@ -172,6 +152,74 @@ fn interrupted_run_resumes_where_it_stopped() {
     // The tracker state is saved with every cached pose, so the resumed run
     // is identical to one that was never interrupted.
     assert_eq!(a, b);
+}
+
+/// Poses in the run's pose cache.
+fn cached_poses(out: &Path) -> usize {
+    std::fs::read_dir(out.join("cache"))
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with("pose-"))
+        .flat_map(|e| std::fs::read_dir(e.path()).into_iter().flatten().flatten())
+        .filter(|e| {
+            e.file_name().to_string_lossy().ends_with(".json") && e.file_name() != "config.json"
+        })
+        .count()
+}
+
+/// Waits until `n` poses are cached, the run still going.
+fn wait_for_poses(out: &Path, child: &mut std::process::Child, n: usize) {
+    let deadline = Instant::now() + Duration::from_secs(600);
+    while cached_poses(out) < n {
+        assert!(Instant::now() < deadline, "no progress");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before it could be interrupted"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn sigterm_stops_after_the_frame_in_flight_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let mut child = run_args(&out, 100, 139)
+        .args(["--set", "run.batch_size=1"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_poses(&out, &mut child, 5);
+    let pid = child.id().to_string();
+    let sent = std::process::Command::new("kill")
+        .args(["-TERM", &pid])
+        .status();
+    assert!(sent.unwrap().success());
+    let ended = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&ended.stderr);
+    // 128 + SIGTERM, as shells and Slurm report a task ended by it.
+    assert_eq!(ended.status.code(), Some(143), "{stderr}");
+    let error: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(error.len(), 1, "{stderr}");
+    assert!(error[0].contains("interrupted during poses"), "{stderr}");
+    let manifest = read_json(&out.join("run.json"));
+    assert_eq!(manifest["status"], "interrupted");
+    assert_eq!(manifest["interrupted_during"], "poses");
+    assert!(!out.join("keypoints.csv").exists());
+
+    // The rerun resumes and equals a run that was never stopped.
+    run_ok(&mut run_args(&out, 100, 139));
+    let manifest = read_json(&out.join("run.json"));
+    assert!(manifest["frames_from_cache"].as_u64().unwrap() >= 5);
+    assert!(manifest.get("status").is_none());
+    let clean = dir.path().join("clean");
+    run_ok(run_args(&clean, 100, 139).args(["--set", "run.cache=false"]));
+    assert_eq!(
+        rows(&out.join("keypoints.csv")),
+        rows(&clean.join("keypoints.csv"))
+    );
 }
 
 #[test]

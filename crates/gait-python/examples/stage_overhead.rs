@@ -14,14 +14,21 @@ use image::RgbImage;
 use pyo3::prelude::*;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<usize> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
+    let args: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
     let (w, h, calls) = match args[..] {
         [w, h, n] => (w, h, n),
         _ => (1920, 1080, 2000),
     };
-    let cfg: PythonStageConfig = toml::from_str("module = \"constant_pose\"\nclass = \"ConstantPose\"")?;
+    let cfg: PythonStageConfig =
+        toml::from_str("module = \"constant_pose\"\nclass = \"ConstantPose\"")?;
     let mut stage = gait_python::load_pose_estimator(&cfg, &StageContext::new("."))?;
-    let frame = vec![Frame::new(0, RgbImage::from_pixel(w as u32, h as u32, image::Rgb([90, 120, 150])))];
+    let frame = vec![Frame::new(
+        0,
+        RgbImage::from_pixel(w as u32, h as u32, image::Rgb([90, 120, 150])),
+    )];
     for _ in 0..100 {
         stage.estimate(&frame)?;
     }

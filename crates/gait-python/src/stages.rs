@@ -237,25 +237,22 @@ struct PythonEdge {
 
 impl EdgeDetector for PythonEdge {
     fn detect(&mut self, frames: &[Frame]) -> Result<Vec<EdgeMap>, StageError> {
-        self.stage.call(frames, None, |np, result| {
-            let items = output::items(result, frames.len()).map_err(|r| (first(frames), r))?;
-            items
-                .iter()
-                .zip(frames)
-                .map(|(item, frame)| {
-                    let (w, h) = (frame.width(), frame.height());
-                    let pixels = output::image(np, item, &[h as usize, w as usize])
-                        .map_err(|r| (frame.index, r))?;
-                    let image = GrayImage::from_raw(w, h, pixels)
-                        .ok_or((frame.index, "wrong number of pixels".to_string()))?;
-                    Ok(EdgeMap {
-                        index: frame.index,
-                        image,
-                        resize: Resize::identity(w, h),
-                    })
-                })
-                .collect()
-        })
+        let maps = self
+            .stage
+            .call(frames, None, |np, result| images(np, result, frames, 1))?;
+        Ok(maps
+            .into_iter()
+            .zip(frames)
+            .map(|(pixels, frame)| {
+                let (w, h) = (frame.width(), frame.height());
+                EdgeMap {
+                    index: frame.index,
+                    image: GrayImage::from_raw(w, h, pixels)
+                        .unwrap_or_else(|| GrayImage::new(w, h)),
+                    resize: Resize::identity(w, h),
+                }
+            })
+            .collect())
     }
 }
 
@@ -269,22 +266,41 @@ impl ImageRegenerator for PythonRegenerator {
         frames: &[Frame],
         edges: Option<&[EdgeMap]>,
     ) -> Result<Vec<Frame>, StageError> {
-        self.stage.call(frames, edges, |np, result| {
-            let items = output::items(result, frames.len()).map_err(|r| (first(frames), r))?;
-            items
-                .iter()
-                .zip(frames)
-                .map(|(item, frame)| {
-                    let (w, h) = (frame.width(), frame.height());
-                    let pixels = output::image(np, item, &[h as usize, w as usize, 3])
-                        .map_err(|r| (frame.index, r))?;
-                    let image = RgbImage::from_raw(w, h, pixels)
-                        .ok_or((frame.index, "wrong number of pixels".to_string()))?;
-                    Ok(Frame::new(frame.index, image))
-                })
-                .collect()
-        })
+        let images = self
+            .stage
+            .call(frames, edges, |np, result| images(np, result, frames, 3))?;
+        Ok(images
+            .into_iter()
+            .zip(frames)
+            .map(|(pixels, frame)| {
+                let (w, h) = (frame.width(), frame.height());
+                let image = RgbImage::from_raw(w, h, pixels).unwrap_or_else(|| RgbImage::new(w, h));
+                Frame::new(frame.index, image)
+            })
+            .collect())
     }
+}
+
+/// The pixels of one `uint8` image per frame, of the frame's size with
+/// `channels` (1: height x width, 3: height x width x 3), checked.
+fn images(
+    np: &Bound<'_, PyModule>,
+    result: &Bound<'_, PyAny>,
+    frames: &[Frame],
+    channels: usize,
+) -> Result<Vec<Vec<u8>>, (usize, String)> {
+    let items = output::items(result, frames.len()).map_err(|r| (first(frames), r))?;
+    items
+        .iter()
+        .zip(frames)
+        .map(|(item, frame)| {
+            let mut shape = vec![frame.height() as usize, frame.width() as usize];
+            if channels > 1 {
+                shape.push(channels);
+            }
+            output::image(np, item, &shape).map_err(|r| (frame.index, r))
+        })
+        .collect()
 }
 
 fn first(frames: &[Frame]) -> usize {
