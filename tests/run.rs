@@ -243,3 +243,31 @@ fn a_later_first_frame_does_not_reuse_tracked_poses() {
         rows(&alone.join("keypoints.csv"))
     );
 }
+
+#[test]
+fn a_second_run_into_a_busy_folder_is_refused_and_a_killed_one_leaves_no_lock() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let mut first = run_args(&out, 100, 139)
+        .args(["--set", "run.batch_size=1"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for_poses(&out, &mut first, 2);
+    let second = run_args(&out, 100, 139).output().unwrap();
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(2), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(
+        lines[0].contains(&format!("pid {}", first.id())) && lines[0].contains("gait run"),
+        "{stderr}"
+    );
+    // Killed hard, the holder cannot clean up; the kernel drops its lock.
+    first.kill().unwrap();
+    first.wait().unwrap();
+    run_ok(&mut run_args(&out, 100, 139));
+    assert!(out.join("keypoints.csv").exists());
+    assert!(!out.join(".gait.lock").exists());
+}

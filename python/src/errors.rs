@@ -50,9 +50,10 @@ pub(crate) fn to_py(e: PipelineError) -> PyErr {
         PipelineError::Stage(gait_core::StageError::BadInput(_)) => InputError::new_err(message),
         PipelineError::Stage(_) => StageError::new_err(message),
         PipelineError::Interrupted { .. } => PyKeyboardInterrupt::new_err(message),
-        PipelineError::Io { .. } | PipelineError::Cache { .. } | PipelineError::Output { .. } => {
-            OutputError::new_err(message)
-        }
+        PipelineError::Io { .. }
+        | PipelineError::Cache { .. }
+        | PipelineError::Output { .. }
+        | PipelineError::Busy { .. } => OutputError::new_err(message),
     }
 }
 

@@ -24,7 +24,9 @@ pub fn install(handle: &RunHandle) {
             if RECEIVED.swap(signal, Ordering::SeqCst) != 0 {
                 std::process::exit(128 + signal);
             }
-            eprintln!("\nstopping after the frame in flight (signal {signal}; again to stop at once)");
+            eprintln!(
+                "\nstopping after the frame in flight (signal {signal}; again to stop at once)"
+            );
             handle.stop();
         }
     });

@@ -20,6 +20,11 @@ pub enum PipelineError {
     },
     #[error("cache {path}: {message}")]
     Cache { path: PathBuf, message: String },
+    /// Another process writes into the folder now.
+    #[error(
+        "{path} is in use by {holder}; wait for it to end or stop it, or choose another folder"
+    )]
+    Busy { path: PathBuf, holder: String },
     /// The run was asked to stop (Ctrl-C in Python); the caches keep the frames done.
     #[error("interrupted during {step}; the cache keeps the frames done, so a rerun resumes")]
     Interrupted { step: String },

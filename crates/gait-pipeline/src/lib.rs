@@ -8,6 +8,7 @@ pub mod config;
 mod driver;
 pub mod edges;
 mod error;
+pub mod folder_lock;
 pub mod input;
 pub mod interpolate;
 pub mod manifest;
@@ -25,6 +26,7 @@ mod video_decoder;
 
 pub use config::PipelineConfig;
 pub use error::PipelineError;
+pub use folder_lock::FolderLock;
 pub use outputs::{OutputOptions, Outputs, write_outputs};
 pub use overlay::regenerated_dir;
 pub use progress::RunHandle;

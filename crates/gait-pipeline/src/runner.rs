@@ -41,6 +41,9 @@ pub struct RunSummary {
     pub manifest: RunManifest,
     /// Angles, events and cycles of the run.
     pub kinematics: Option<gait_kin::KinResult>,
+    /// The run folder's lock, held until the summary (and every clone) is
+    /// dropped, so the report and exports written after it are covered too.
+    pub lock: Option<std::sync::Arc<crate::FolderLock>>,
 }
 
 impl RunSummary {
@@ -105,11 +108,28 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let started_unix = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
-    run_from(config, opts, started_unix).inspect_err(|e| {
+    let lock = crate::FolderLock::acquire(&opts.out, &holder(&opts.command))?;
+    let mut summary = run_from(config, opts, started_unix).inspect_err(|e| {
         if let PipelineError::Interrupted { step } = e {
             write_interrupted(config, opts, started_unix, step);
         }
-    })
+    })?;
+    summary.lock = Some(std::sync::Arc::new(lock));
+    Ok(summary)
+}
+
+/// How the lock file names the run, e.g. "gait run".
+fn holder(command: &[String]) -> String {
+    let program = command.first().map_or("gait", |c| {
+        Path::new(c)
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or(c)
+    });
+    match command.get(1).filter(|_| program == "gait") {
+        Some(sub) => format!("{program} {sub}"),
+        None => program.to_string(),
+    }
 }
 
 /// run.json of an interrupted run: what was being done, and how to repeat it
@@ -204,6 +224,7 @@ fn run_from(
         poses: seq,
         manifest,
         kinematics: None,
+        lock: None,
     };
     // Keypoints are on disk before the kinematics run, so a kinematics
     // failure loses none of the (possibly hours of) pose work.

@@ -122,6 +122,18 @@ async fn save_corrections(State(app): State<Shared>, body: Bytes) -> Response {
     let src = app.src.clone();
     let work = tokio::task::spawn_blocking(move || {
         let view = analysis::recompute(&src, &c)?;
+        // Not while a run writes into the folder (it reads corrections.toml at its end).
+        let folder = src
+            .corrections_path
+            .parent()
+            .unwrap_or(std::path::Path::new("."));
+        let _lock =
+            gait_pipeline::FolderLock::acquire(folder, "gait review save").map_err(|e| {
+                gait_kin::KinError::Io {
+                    context: format!("saving {}", src.corrections_path.display()),
+                    source: std::io::Error::other(e.to_string()),
+                }
+            })?;
         gait_pipeline::atomic::write(&src.corrections_path, &analysis::toml_bytes(&c)).map_err(
             |e| gait_kin::KinError::Io {
                 context: format!("saving {}", src.corrections_path.display()),

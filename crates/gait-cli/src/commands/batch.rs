@@ -114,6 +114,8 @@ fn submit(args: &Args, study: &Path, out: &Path, models_dir: &Path) -> Result<Ex
     let study = Study::read(study).map_err(fail)?;
     let (plan, configs) = Plan::make(&study, out, args.split_frames).map_err(fail)?;
     let out = &std::path::absolute(out).unwrap_or_else(|_| out.to_path_buf());
+    // One `gait batch` per study folder at a time (each row's run locks its own folder).
+    let _lock = gait_pipeline::FolderLock::acquire(out, "gait batch")?;
     if let Some(jobs) = slurm::Jobs::read(out) {
         let busy = slurm::queued(&jobs.ids());
         if !busy.is_empty() {
