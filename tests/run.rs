@@ -271,3 +271,62 @@ fn a_second_run_into_a_busy_folder_is_refused_and_a_killed_one_leaves_no_lock() 
     assert!(out.join("keypoints.csv").exists());
     assert!(!out.join(".gait.lock").exists());
 }
+
+#[test]
+fn corrupt_cache_entries_are_recomputed_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    run_ok(&mut run_args(&out, 100, 119));
+    let before = std::fs::read(out.join("keypoints.csv")).unwrap();
+    // Flip a byte in two entries and cut one short: poses and the people of a frame.
+    let entries: Vec<std::path::PathBuf> = ["pose-", "subject-"]
+        .iter()
+        .flat_map(|prefix| {
+            std::fs::read_dir(out.join("cache"))
+                .unwrap()
+                .flatten()
+                .filter(move |e| e.file_name().to_string_lossy().starts_with(prefix))
+                .flat_map(|e| std::fs::read_dir(e.path()).unwrap().flatten())
+                .map(|e| e.path())
+                .filter(|p| p.file_name().is_some_and(|n| n != "config.json"))
+        })
+        .collect();
+    let pick = |stage: &str, name: &str| {
+        entries
+            .iter()
+            .find(|p| {
+                p.ends_with(name)
+                    && p.parent()
+                        .and_then(|d| d.file_name())
+                        .is_some_and(|d| d.to_string_lossy().starts_with(stage))
+            })
+            .unwrap_or_else(|| panic!("no cache entry {stage}*/{name} in {entries:?}"))
+            .clone()
+    };
+    let corrupted = [
+        pick("pose-", "000105.json"),
+        pick("pose-", "000112.json"),
+        pick("subject-", "000110.json"),
+    ];
+    for (k, path) in corrupted.iter().enumerate() {
+        let mut bytes = std::fs::read(path).unwrap();
+        if k % 2 == 0 {
+            bytes[1] ^= 0x20;
+        } else {
+            bytes.truncate(bytes.len() / 2);
+        }
+        std::fs::write(path, bytes).unwrap();
+    }
+    run_ok(&mut run_args(&out, 100, 119));
+    let manifest = read_json(&out.join("run.json"));
+    let warnings: Vec<&str> = manifest["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|w| w.as_str())
+        .filter(|w| w.contains("failed its checksum"))
+        .collect();
+    assert!(warnings.len() >= corrupted.len(), "{warnings:?}");
+    // Recomputed, not used: the results are those of the first run.
+    assert_eq!(std::fs::read(out.join("keypoints.csv")).unwrap(), before);
+}

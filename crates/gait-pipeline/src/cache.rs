@@ -4,6 +4,7 @@
 //! interrupted run resumes at the first frame it had not finished.
 
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use gait_core::{Keypoint, Pose, Resize};
 use serde::Serialize;
@@ -27,11 +28,77 @@ pub(crate) fn chain_key(previous: &str, stage: &str, config: &impl Serialize) ->
 /// One stage's folder in the cache, or nothing when caching is off.
 pub(crate) struct StageCache {
     dir: Option<PathBuf>,
+    /// Entries found corrupt (and recomputed), for run.json's warnings.
+    corrupt: Mutex<Vec<PathBuf>>,
+}
+
+/// What ends every entry: this tag and the first 8 bytes of the SHA-256 of
+/// the bytes before it, in hex. A truncated or altered entry fails the check.
+const SUM_TAG: &[u8] = b"\ngait-sha256:";
+const SUM_LEN: usize = SUM_TAG.len() + 16 + 1;
+
+fn with_sum(mut bytes: Vec<u8>) -> Vec<u8> {
+    let sum = hex(&Sha256::digest(&bytes)[..8]);
+    bytes.extend_from_slice(SUM_TAG);
+    bytes.extend_from_slice(sum.as_bytes());
+    bytes.push(b'\n');
+    bytes
+}
+
+/// The bytes of an entry whose checksum holds.
+fn checked(mut bytes: Vec<u8>) -> Option<Vec<u8>> {
+    let body = bytes.len().checked_sub(SUM_LEN)?;
+    let (data, footer) = bytes.split_at(body);
+    let sum = footer.strip_prefix(SUM_TAG)?.strip_suffix(b"\n")?;
+    if sum != hex(&Sha256::digest(data)[..8]).as_bytes() {
+        return None;
+    }
+    bytes.truncate(body);
+    Some(bytes)
 }
 
 impl StageCache {
     pub(crate) fn disabled() -> Self {
-        Self { dir: None }
+        Self {
+            dir: None,
+            corrupt: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// One warning per entry that failed its checksum since the last call.
+    pub(crate) fn take_warnings(&self) -> Vec<String> {
+        let mut corrupt = self.corrupt.lock().unwrap_or_else(|e| e.into_inner());
+        corrupt
+            .drain(..)
+            .map(|p| {
+                format!(
+                    "cache entry {} failed its checksum (truncated or altered); it was recomputed",
+                    p.display()
+                )
+            })
+            .collect()
+    }
+
+    /// An entry's bytes: `None` when absent, or corrupt (then noted, to be recomputed).
+    fn read(&self, index: usize, ext: &str) -> Option<Vec<u8>> {
+        let path = self.file(index, ext)?;
+        let bytes = std::fs::read(&path).ok()?;
+        let data = checked(bytes);
+        if data.is_none() {
+            self.corrupt
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push(path);
+        }
+        data
+    }
+
+    /// Writes an entry (atomically, with its checksum).
+    fn write(&self, index: usize, ext: &str, bytes: Vec<u8>) -> Result<(), PipelineError> {
+        let Some(path) = self.file(index, ext) else {
+            return Ok(());
+        };
+        atomic::write(&path, &with_sum(bytes)).map_err(|e| cache_err(&path, e))
     }
 
     /// Opens (creating) `<root>/<stage>-<key prefix>`, recording the stage's
@@ -42,14 +109,20 @@ impl StageCache {
         key: &str,
         config: &impl Serialize,
     ) -> Result<Self, PipelineError> {
-        let dir = root.join(format!("{stage}-{}", &key[..16]));
+        // Entries carry checksums since this format: a folder name of its own,
+        // so entries of the earlier format are not taken for corrupt ones.
+        let format_key = hex(&Sha256::digest(format!("{key}:checked-entries").as_bytes()));
+        let dir = root.join(format!("{stage}-{}", &format_key[..16]));
         std::fs::create_dir_all(&dir).map_err(|e| cache_err(&dir, e))?;
         let about = dir.join("config.json");
         if !about.exists() {
             let json = serde_json::to_vec_pretty(config).unwrap_or_default();
             atomic::write(&about, &json).map_err(|e| cache_err(&about, e))?;
         }
-        Ok(Self { dir: Some(dir) })
+        Ok(Self {
+            dir: Some(dir),
+            corrupt: Mutex::new(Vec::new()),
+        })
     }
 
     fn file(&self, index: usize, ext: &str) -> Option<PathBuf> {
@@ -59,8 +132,8 @@ impl StageCache {
     }
 
     pub(crate) fn load_rgb(&self, index: usize) -> Option<image::RgbImage> {
-        let path = self.file(index, "png")?;
-        image::open(path).ok().map(|i| i.to_rgb8())
+        let bytes = self.read(index, "png")?;
+        image::load_from_memory(&bytes).ok().map(|i| i.to_rgb8())
     }
 
     pub(crate) fn store_rgb(
@@ -79,9 +152,11 @@ impl StageCache {
 
     /// An edge map and the resize it was made with.
     pub(crate) fn load_edge(&self, index: usize) -> Option<(image::GrayImage, Resize)> {
-        let img = image::open(self.file(index, "png")?).ok()?.to_luma8();
-        let text = std::fs::read_to_string(self.file(index, "json")?).ok()?;
-        Some((img, serde_json::from_str(&text).ok()?))
+        let img = image::load_from_memory(&self.read(index, "png")?)
+            .ok()?
+            .to_luma8();
+        let json = self.read(index, "json")?;
+        Some((img, serde_json::from_slice(&json).ok()?))
     }
 
     pub(crate) fn store_edge(
@@ -90,11 +165,11 @@ impl StageCache {
         img: &image::GrayImage,
         resize: &Resize,
     ) -> Result<(), PipelineError> {
-        let Some(path) = self.file(index, "json") else {
-            return Ok(());
-        };
-        let json = serde_json::to_vec(resize).unwrap_or_default();
-        atomic::write(&path, &json).map_err(|e| cache_err(&path, e))?;
+        self.write(
+            index,
+            "json",
+            serde_json::to_vec(resize).unwrap_or_default(),
+        )?;
         self.store_png(
             index,
             img.as_raw(),
@@ -112,26 +187,25 @@ impl StageCache {
         h: u32,
         color: image::ExtendedColorType,
     ) -> Result<(), PipelineError> {
-        let Some(path) = self.file(index, "png") else {
-            return Ok(());
-        };
-        atomic::write_with(&path, |out| {
-            image::ImageEncoder::write_image(
-                image::codecs::png::PngEncoder::new(out),
-                raw,
-                w,
-                h,
-                color,
-            )
-            .map_err(std::io::Error::other)
-        })
-        .map_err(|e| cache_err(&path, e))
+        let mut png = Vec::new();
+        let encoded = image::ImageEncoder::write_image(
+            image::codecs::png::PngEncoder::new(&mut png),
+            raw,
+            w,
+            h,
+            color,
+        );
+        if let Err(e) = encoded {
+            let path = self.file(index, "png").unwrap_or_default();
+            return Err(cache_err(&path, std::io::Error::other(e)));
+        }
+        self.write(index, "png", png)
     }
 
     /// A pose with `n` keypoints; a file of another length is ignored.
     pub(crate) fn load_pose(&self, index: usize, n: usize) -> Option<Pose> {
-        let text = std::fs::read_to_string(self.file(index, "json")?).ok()?;
-        let rows: Vec<Option<[f64; 3]>> = serde_json::from_str(&text).ok()?;
+        let json = self.read(index, "json")?;
+        let rows: Vec<Option<[f64; 3]>> = serde_json::from_slice(&json).ok()?;
         (rows.len() == n).then(|| Pose {
             keypoints: rows
                 .into_iter()
@@ -142,20 +216,16 @@ impl StageCache {
 
     /// A pose estimator's tracking state saved after frame `index`.
     pub(crate) fn load_state(&self, index: usize) -> Option<Vec<u8>> {
-        std::fs::read(self.file(index, "state")?).ok()
+        self.read(index, "state")
     }
 
     pub(crate) fn store_state(&self, index: usize, state: &[u8]) -> Result<(), PipelineError> {
-        let Some(path) = self.file(index, "state") else {
-            return Ok(());
-        };
-        atomic::write(&path, state).map_err(|e| cache_err(&path, e))
+        self.write(index, "state", state.to_vec())
     }
 
     /// A JSON record of frame `index` (e.g. the people found in it).
     pub(crate) fn load_json<T: DeserializeOwned>(&self, index: usize) -> Option<T> {
-        let bytes = std::fs::read(self.file(index, "json")?).ok()?;
-        serde_json::from_slice(&bytes).ok()
+        serde_json::from_slice(&self.read(index, "json")?).ok()
     }
 
     pub(crate) fn store_json(
@@ -163,25 +233,17 @@ impl StageCache {
         index: usize,
         value: &impl Serialize,
     ) -> Result<(), PipelineError> {
-        let Some(path) = self.file(index, "json") else {
-            return Ok(());
-        };
-        let json = serde_json::to_vec(value).unwrap_or_default();
-        atomic::write(&path, &json).map_err(|e| cache_err(&path, e))
+        self.write(index, "json", serde_json::to_vec(value).unwrap_or_default())
     }
 
     pub(crate) fn store_pose(&self, index: usize, pose: &Pose) -> Result<(), PipelineError> {
-        let Some(path) = self.file(index, "json") else {
-            return Ok(());
-        };
         // JSON has no NaN: a missing keypoint is `null`.
         let rows: Vec<Option<[f64; 3]>> = pose
             .keypoints
             .iter()
             .map(|k| k.is_found().then_some([k.x, k.y, k.likelihood]))
             .collect();
-        let json = serde_json::to_vec(&rows).unwrap_or_default();
-        atomic::write(&path, &json).map_err(|e| cache_err(&path, e))
+        self.write(index, "json", serde_json::to_vec(&rows).unwrap_or_default())
     }
 }
 
@@ -195,6 +257,34 @@ fn cache_err(path: &Path, e: std::io::Error) -> PipelineError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_truncated_or_altered_entry_is_refused_and_reported() {
+        let root = tempfile::tempdir().unwrap();
+        let cache = StageCache::open(root.path(), "pose", &"ab".repeat(32), &1).unwrap();
+        let pose = Pose {
+            keypoints: vec![Keypoint::new(1.5, 2.5, 0.75), Keypoint::new(-3.0, 4.0, 0.0)],
+        };
+        for index in 0..3 {
+            cache.store_pose(index, &pose).unwrap();
+        }
+        assert_eq!(cache.load_pose(0, 2), Some(pose.clone()));
+        assert!(cache.take_warnings().is_empty());
+        let file = |i: usize| cache.file(i, "json").unwrap();
+        let mut flipped = std::fs::read(file(1)).unwrap();
+        flipped[3] ^= 0x04;
+        std::fs::write(file(1), flipped).unwrap();
+        let whole = std::fs::read(file(2)).unwrap();
+        std::fs::write(file(2), &whole[..whole.len() - 5]).unwrap();
+        assert_eq!(cache.load_pose(1, 2), None);
+        assert_eq!(cache.load_pose(2, 2), None);
+        let warnings = cache.take_warnings();
+        assert_eq!(warnings.len(), 2, "{warnings:?}");
+        assert!(warnings[0].contains("000001.json") && warnings[0].contains("checksum"));
+        // Stored again, it reads back.
+        cache.store_pose(1, &pose).unwrap();
+        assert_eq!(cache.load_pose(1, 2), Some(pose));
+    }
 
     #[test]
     fn keys_change_with_any_upstream_config() {

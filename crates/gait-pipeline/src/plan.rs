@@ -28,6 +28,16 @@ pub(crate) struct StageCaches {
     pub(crate) original: StageCache,
 }
 
+impl StageCaches {
+    /// Warnings for entries found corrupt (and recomputed) in any of them.
+    pub(crate) fn take_warnings(&self) -> Vec<String> {
+        [&self.edge, &self.regenerator, &self.pose, &self.original]
+            .iter()
+            .flat_map(|c| c.take_warnings())
+            .collect()
+    }
+}
+
 /// Model checksums and the input key, known before any frame is decoded.
 pub(crate) struct Models {
     pub(crate) input_key: String,

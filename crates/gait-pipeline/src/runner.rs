@@ -182,6 +182,7 @@ fn run_from(
     }
     .run()?;
     warnings.extend(stages.regenerator.take_warnings());
+    warnings.extend(caches.take_warnings());
     if out.all.is_empty() {
         return Err(PipelineError::input(
             &opts.input,
@@ -334,15 +335,16 @@ fn find_subject(
         &bar,
     )?;
     bar.finish_and_clear();
+    let corrupt = cache.take_warnings();
     Ok(match found {
         Found::Subject(s) => {
-            let mut warnings = Vec::new();
+            let mut warnings = corrupt;
             if !s.walking {
                 warnings.push(format!("no walking subject found: {}", s.reason));
             }
             (Some(s), Some((plan::SUBJECT.to_string(), record)), warnings)
         }
-        Found::Off(why) => (None, None, why.into_iter().collect()),
+        Found::Off(why) => (None, None, corrupt.into_iter().chain(why).collect()),
     })
 }
 
