@@ -45,6 +45,29 @@ fn with_sum(mut bytes: Vec<u8>) -> Vec<u8> {
     bytes
 }
 
+/// The verified bytes of the cache entry file at `path` (its checksum taken
+/// off); `None` when it is absent, truncated or altered.
+pub fn read_entry(path: &Path) -> Option<Vec<u8>> {
+    checked(std::fs::read(path).ok()?)
+}
+
+/// What a cache entry file holds for `bytes`: them and their checksum.
+pub fn entry_bytes(bytes: Vec<u8>) -> Vec<u8> {
+    with_sum(bytes)
+}
+
+/// The folder of a stage's entries under the cache root, from its key (or
+/// the key's first 16 digits, as run.json records it).
+pub(crate) fn folder(root: &Path, stage: &str, key: &str) -> PathBuf {
+    let short = key.get(..16).unwrap_or(key);
+    // Entries carry checksums since this format: a folder name of its own,
+    // so entries of the earlier format are not taken for corrupt ones.
+    let format_key = hex(&Sha256::digest(
+        format!("{short}:checked-entries").as_bytes(),
+    ));
+    root.join(format!("{stage}-{}", &format_key[..16]))
+}
+
 /// The bytes of an entry whose checksum holds.
 fn checked(mut bytes: Vec<u8>) -> Option<Vec<u8>> {
     let body = bytes.len().checked_sub(SUM_LEN)?;
@@ -109,10 +132,7 @@ impl StageCache {
         key: &str,
         config: &impl Serialize,
     ) -> Result<Self, PipelineError> {
-        // Entries carry checksums since this format: a folder name of its own,
-        // so entries of the earlier format are not taken for corrupt ones.
-        let format_key = hex(&Sha256::digest(format!("{key}:checked-entries").as_bytes()));
-        let dir = root.join(format!("{stage}-{}", &format_key[..16]));
+        let dir = folder(root, stage, key);
         std::fs::create_dir_all(&dir).map_err(|e| cache_err(&dir, e))?;
         let about = dir.join("config.json");
         if !about.exists() {

@@ -24,6 +24,7 @@ pub mod selection;
 mod subject;
 mod video_decoder;
 
+pub use cache::{entry_bytes as cache_entry_bytes, read_entry as read_cache_entry};
 pub use config::PipelineConfig;
 pub use error::PipelineError;
 pub use folder_lock::FolderLock;

@@ -25,7 +25,7 @@ pub fn regenerated_dir(dir: &Path, config: &PipelineConfig) -> Option<PathBuf> {
     let text = std::fs::read_to_string(dir.join("run.json")).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
     let key = v.pointer("/stages/regenerator/cache_key")?.as_str()?;
-    let folder = root.join(format!("regenerator-{}", key.get(..16)?));
+    let folder = crate::cache::folder(&root, "regenerator", key);
     folder.is_dir().then_some(folder)
 }
 
@@ -85,7 +85,8 @@ pub(crate) fn write_overlay(
         };
         let regen = regenerated
             .as_ref()
-            .and_then(|d| image::open(d.join(format!("{:06}.png", frame.index))).ok())
+            .and_then(|d| crate::read_cache_entry(&d.join(format!("{:06}.png", frame.index))))
+            .and_then(|png| image::load_from_memory(&png).ok())
             .map(|i| i.to_rgb8());
         writer
             .push(&frame.image, regen.as_ref(), m)

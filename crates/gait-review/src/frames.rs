@@ -174,7 +174,8 @@ impl RegeneratedStore {
             return Some(b.clone());
         }
         // The name is built from a number only: no path from the request reaches the disk.
-        let bytes = Arc::new(std::fs::read(self.dir.join(format!("{n:06}.png"))).ok()?);
+        let path = self.dir.join(format!("{n:06}.png"));
+        let bytes = Arc::new(gait_pipeline::read_cache_entry(&path)?);
         cache.insert(n, bytes.clone());
         Some(bytes)
     }
@@ -237,12 +238,16 @@ mod tests {
     fn regenerated_frames_are_found_by_number_only() {
         let dir = tempfile::tempdir().unwrap();
         for name in ["000007.png", "000012.png", "notes.txt", "x.png"] {
-            std::fs::write(dir.path().join(name), name).unwrap();
+            let entry = gait_pipeline::cache_entry_bytes(name.as_bytes().to_vec());
+            std::fs::write(dir.path().join(name), entry).unwrap();
         }
+        // Without its checksum (cut short), an entry is not served.
+        std::fs::write(dir.path().join("000009.png"), b"000009.png").unwrap();
         let store = RegeneratedStore::new(dir.path().to_path_buf());
-        assert_eq!(store.frames(), vec![7, 12]);
+        assert_eq!(store.frames(), vec![7, 9, 12]);
         assert_eq!(store.get(7).unwrap().as_slice(), b"000007.png");
         assert!(store.get(8).is_none());
+        assert!(store.get(9).is_none());
         // Served from memory once read.
         std::fs::remove_file(dir.path().join("000007.png")).unwrap();
         assert!(store.get(7).is_some());
