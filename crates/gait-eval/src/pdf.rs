@@ -57,6 +57,7 @@ pub fn print_pdf(chromium: &Path, html: &Path, pdf: &Path) -> Result<(), EvalErr
         if start.elapsed() > Duration::from_secs(120) {
             let _ = child.kill();
             let _ = std::fs::remove_dir_all(&profile);
+            let _ = std::fs::remove_file(&tmp);
             return Err(EvalError::io(
                 "printing report.pdf",
                 std::io::Error::other("chromium did not finish within 120 s"),
@@ -72,6 +73,8 @@ pub fn print_pdf(chromium: &Path, html: &Path, pdf: &Path) -> Result<(), EvalErr
         .map(|m| m.len() > 0)
         .unwrap_or(false);
     if !ok {
+        // An empty or cut-short file (a full disk) is not left behind.
+        let _ = std::fs::remove_file(&tmp);
         let said = String::from_utf8_lossy(&out.stderr);
         let last = said
             .lines()
@@ -83,7 +86,10 @@ pub fn print_pdf(chromium: &Path, html: &Path, pdf: &Path) -> Result<(), EvalErr
             std::io::Error::other(format!("chromium wrote no PDF ({})", last.trim())),
         ));
     }
-    std::fs::rename(&tmp, pdf).map_err(|e| EvalError::io(format!("renaming {}", tmp.display()), e))
+    std::fs::rename(&tmp, pdf).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        EvalError::io(format!("renaming {}", tmp.display()), e)
+    })
 }
 
 /// A fresh browser profile beside the PDF, so printing never touches the
