@@ -1,6 +1,6 @@
 //! gait's errors as Python exceptions, with the CLI's one-line messages.
 
-use gait_pipeline::PipelineError;
+use gait_pipeline::{PipelineError, one_line};
 use pyo3::exceptions::{PyException, PyKeyboardInterrupt};
 use pyo3::prelude::*;
 
@@ -59,9 +59,4 @@ pub(crate) fn to_py(e: PipelineError) -> PyErr {
 
 pub(crate) fn input_error(message: String) -> PyErr {
     InputError::new_err(one_line(&message))
-}
-
-/// Library messages can span lines (TOML errors); the CLI promises one line.
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
 }

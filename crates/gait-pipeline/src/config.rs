@@ -18,6 +18,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::PipelineError;
+use crate::one_line;
 use crate::selection::SelectionConfig;
 
 /// The built-in baseline: no edge map, passthrough, the default pose model.
@@ -321,10 +322,6 @@ fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), PipelineError> {
     }
     node.insert(last.to_string(), value);
     Ok(())
-}
-
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
 #[cfg(test)]

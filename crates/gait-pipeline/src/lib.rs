@@ -12,6 +12,7 @@ pub mod folder_lock;
 pub mod input;
 pub mod interpolate;
 pub mod manifest;
+mod message;
 pub mod outputs;
 mod overlay;
 mod passes;
@@ -28,6 +29,7 @@ pub use cache::{entry_bytes as cache_entry_bytes, read_entry as read_cache_entry
 pub use config::PipelineConfig;
 pub use error::PipelineError;
 pub use folder_lock::FolderLock;
+pub use message::one_line;
 pub use outputs::{OutputOptions, Outputs, write_outputs};
 pub use overlay::regenerated_dir;
 pub use progress::RunHandle;
