@@ -25,7 +25,7 @@ export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
 export CC_aarch64_unknown_linux_gnu=aarch64-linux-gnu-gcc
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L /usr/aarch64-linux-gnu"
 cd "$root"
-out=$(cargo test --target aarch64-unknown-linux-gnu -p gait-diffuse --lib -- \
+out=$(cargo test --target aarch64-unknown-linux-gnu -p gait-diffuse --no-default-features --lib -- \
     sgemm attention feed_forward --nocapture 2>&1) || { echo "$out" >&2; exit 1; }
 echo "$out" | grep -E 'tile kernels|test result' >&2
 # The run must have reached the NEON kernel, not only the portable one.

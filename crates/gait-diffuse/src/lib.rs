@@ -69,6 +69,7 @@ pub enum RegeneratorConfig {
     /// An external regenerator loaded from a shared library (see docs/adding-a-stage.md).
     Plugin(gait_plugin::PluginConfig),
     /// A regenerator written in Python (see docs/adding-a-stage.md).
+    #[cfg(feature = "python")]
     Python(gait_python::PythonStageConfig),
 }
 
@@ -78,6 +79,7 @@ impl RegeneratorConfig {
             RegeneratorConfig::Passthrough => Ok(Box::new(Passthrough)),
             RegeneratorConfig::Controlnet(c) => Ok(Box::new(ControlnetRegenerator::new(c, ctx)?)),
             RegeneratorConfig::Plugin(p) => Ok(gait_plugin::load_regenerator(p, ctx)?),
+            #[cfg(feature = "python")]
             RegeneratorConfig::Python(p) => gait_python::load_regenerator(p, ctx),
         }
     }
@@ -88,7 +90,9 @@ impl RegeneratorConfig {
             RegeneratorConfig::Passthrough => false,
             RegeneratorConfig::Controlnet(_) => true,
             // The plugin ABI cannot declare it; plugins get edges when [edge] makes them.
-            RegeneratorConfig::Plugin(_) | RegeneratorConfig::Python(_) => false,
+            RegeneratorConfig::Plugin(_) => false,
+            #[cfg(feature = "python")]
+            RegeneratorConfig::Python(_) => false,
         }
     }
 
@@ -138,6 +142,7 @@ impl RegeneratorConfig {
                 }
             },
             RegeneratorConfig::Plugin(p) => vec![p.resolved_path()],
+            #[cfg(feature = "python")]
             RegeneratorConfig::Python(p) => p.module_file().into_iter().collect(),
         }
     }
