@@ -68,8 +68,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", error::one_line(&e.0));
-            ExitCode::from(interrupt::exit_code().unwrap_or(2))
+            eprintln!("error: {}", error::one_line(&e.message));
+            ExitCode::from(interrupt::exit_code().unwrap_or(e.code))
         }
     }
 }

@@ -5,6 +5,7 @@
 //! Stage crates implement [`EdgeDetector`], [`ImageRegenerator`] and [`PoseEstimator`];
 //! they never depend on each other, only on this crate.
 
+pub mod atomic;
 mod backend;
 #[cfg(feature = "candle")]
 pub mod checkpoint;

@@ -2,35 +2,25 @@
 //! made from), each written to a temporary name and renamed when complete.
 
 use std::fs;
-use std::io::Write;
 use std::path::Path;
 
 use gait_core::table::{Column, Table};
 
 use crate::{KinError, KinResult};
 
-/// Writes `name` in `dir` through `dir/.name.partial`, so a crash never leaves a complete-looking file.
+/// Writes `name` in `dir` atomically, so a crash never leaves a complete-looking file.
 fn atomic(
     dir: &Path,
     name: &str,
     fill: impl FnOnce(&mut Vec<u8>) -> Result<(), KinError>,
 ) -> Result<(), KinError> {
-    let io = |what: String| {
-        move |e: std::io::Error| KinError::Io {
-            context: what,
-            source: e,
-        }
-    };
     let mut buf = Vec::new();
     fill(&mut buf)?;
-    let tmp = dir.join(format!(".{name}.partial"));
     let dst = dir.join(name);
-    let mut f = fs::File::create(&tmp).map_err(io(format!("creating {}", tmp.display())))?;
-    f.write_all(&buf)
-        .map_err(io(format!("writing {}", tmp.display())))?;
-    f.sync_all()
-        .map_err(io(format!("writing {}", tmp.display())))?;
-    fs::rename(&tmp, &dst).map_err(io(format!("renaming to {}", dst.display())))
+    gait_core::atomic::write(&dst, &buf).map_err(|e| KinError::Io {
+        context: format!("writing {}", dst.display()),
+        source: e,
+    })
 }
 
 fn ints(values: impl IntoIterator<Item = usize>) -> Column {

@@ -175,7 +175,8 @@ pub(crate) fn one_line(stderr: &[u8], fallback: &str) -> String {
     let lines: Vec<&str> = text
         .lines()
         .map(str::trim)
-        .filter(|l| !l.is_empty())
+        // ffmpeg's "Last message repeated N times" says nothing about the failure.
+        .filter(|l| !l.is_empty() && !l.starts_with("Last message repeated"))
         .collect();
     let tail = lines[lines.len().saturating_sub(3)..].join(" | ");
     if tail.is_empty() {

@@ -268,9 +268,18 @@ impl StageCache {
 }
 
 fn cache_err(path: &Path, e: std::io::Error) -> PipelineError {
+    // A full disk gets its own advice where the error is shown (free space, rerun).
+    let full = matches!(
+        e.kind(),
+        std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded
+    );
     PipelineError::Cache {
         path: path.to_path_buf(),
-        message: format!("{e}; check the disk or set run.cache = false"),
+        message: if full {
+            e.to_string()
+        } else {
+            format!("{e}; check the disk or set run.cache = false")
+        },
     }
 }
 

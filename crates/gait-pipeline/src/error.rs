@@ -34,6 +34,28 @@ pub enum PipelineError {
 }
 
 impl PipelineError {
+    /// True when a disk (or quota) was full: the machine's fault, not the input's. Errors of
+    /// ffmpeg and Chromium reach us only as their text, so that is read too.
+    pub fn out_of_space(&self) -> bool {
+        let full = |e: &std::io::Error| {
+            matches!(
+                e.kind(),
+                std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded
+            )
+        };
+        let mut source: Option<&(dyn std::error::Error + 'static)> = Some(self);
+        while let Some(e) = source {
+            if e.downcast_ref::<std::io::Error>().is_some_and(full) {
+                return true;
+            }
+            source = e.source();
+        }
+        let text = self.to_string();
+        ["No space left on device", "Disk quota exceeded"]
+            .iter()
+            .any(|s| text.contains(s))
+    }
+
     pub(crate) fn io(context: impl Into<String>, source: std::io::Error) -> Self {
         Self::Io {
             context: context.into(),

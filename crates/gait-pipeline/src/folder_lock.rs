@@ -2,6 +2,7 @@
 //! for as long as a run (or a study, or a save of corrections) writes there.
 //! The kernel drops the lock when its holder dies, so a crashed run never
 //! leaves a folder locked; the file names the holder for the one who waits.
+//! Taking the lock removes the temporary files a killed writer left there.
 
 use std::fs::{self, File, OpenOptions, TryLockError};
 use std::io::{Read, Seek, Write};
@@ -48,6 +49,8 @@ impl FolderLock {
             file.set_len(0).map_err(io)?;
             file.rewind().map_err(io)?;
             file.write_all(holder.as_bytes()).map_err(io)?;
+            // Ours now: what a killed writer left half-written can go.
+            crate::atomic::remove_stale(dir);
             return Ok(Self { file, path });
         }
     }

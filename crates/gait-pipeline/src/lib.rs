@@ -2,7 +2,7 @@
 //! configuration, the stage registry, input decoding, the per-frame cache and
 //! the runner that drives frames through the stages.
 
-pub mod atomic;
+pub use gait_core::atomic;
 mod cache;
 pub mod config;
 mod driver;

@@ -70,23 +70,23 @@ const METRIC_COLUMNS: [&str; 5] = [
 
 pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     let text = std::fs::read_to_string(&args.matrix)
-        .map_err(|e| CliError(format!("{}: cannot read ({e})", args.matrix.display())))?;
+        .map_err(|e| CliError::new(format!("{}: cannot read ({e})", args.matrix.display())))?;
     let matrix: Matrix = toml::from_str(&text).map_err(|e| {
-        CliError(format!(
+        CliError::new(format!(
             "{}: {}",
             args.matrix.display(),
             one_line(&e.to_string())
         ))
     })?;
     if matrix.video.is_empty() {
-        return Err(CliError(format!(
+        return Err(CliError::new(format!(
             "{}: add at least one [[video]] with a path",
             args.matrix.display()
         )));
     }
     let here = args.matrix.parent().unwrap_or(Path::new("."));
     let combos = combinations(&matrix.axes)
-        .map_err(|e| CliError(format!("{}: {e}", args.matrix.display())))?;
+        .map_err(|e| CliError::new(format!("{}: {e}", args.matrix.display())))?;
     let cache = args.out.join("cache");
     let mut rows = Vec::new();
     for video in &matrix.video {
@@ -135,11 +135,11 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                             video.prosthetic_side.as_deref(),
                         ) {
                             Ok(m) => row.metrics = Some(m),
-                            Err(e) => row.error = Some(e.0),
+                            Err(e) => row.error = Some(e.message),
                         }
                     }
                 }
-                Err(e) => row.error = Some(e.0),
+                Err(e) => row.error = Some(e.message),
             }
             if let Some(e) = &row.error {
                 eprintln!("ablate: {} [{}] failed: {e}", row.video, row.label);
@@ -223,19 +223,19 @@ fn score(
         Some("left") => Side::Left,
         None | Some("right") => Side::Right,
         Some(other) => {
-            return Err(CliError(format!(
+            return Err(CliError::new(format!(
                 "prosthetic_side `{other}` must be left or right"
             )));
         }
     };
     let truth = gait_eval::read_poses(truth, pred.fps, None)
-        .map_err(|e| CliError(format!("{}: {}", truth.display(), one_line(&e.to_string()))))?;
+        .map_err(|e| CliError::new(format!("{}: {}", truth.display(), one_line(&e.to_string()))))?;
     let opts = EvalOptions {
         prosthetic_side: side,
         ..EvalOptions::default()
     };
     let e = gait_eval::evaluate(&truth, pred, &config.postprocess, &config.kinematics, &opts)
-        .map_err(|e| CliError(one_line(&e.to_string())))?;
+        .map_err(|e| CliError::new(one_line(&e.to_string())))?;
     let v = serde_json::to_value(&e).unwrap_or_default();
     let leg = |role: &str| {
         v["legs"]
@@ -260,7 +260,7 @@ fn score(
 
 fn write_tables(rows: &[Row], out: &Path) -> Result<(), CliError> {
     std::fs::create_dir_all(out)
-        .map_err(|e| CliError(format!("creating {}: {e}", out.display())))?;
+        .map_err(|e| CliError::new(format!("creating {}: {e}", out.display())))?;
     let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.3}"));
     let mut csv = format!(
         "video,config,frames,frames_from_cache,seconds,seconds_per_frame,{},error\n",
@@ -304,7 +304,7 @@ fn write_tables(rows: &[Row], out: &Path) -> Result<(), CliError> {
     for (name, text) in [("comparison.csv", csv), ("comparison.md", md)] {
         let path = out.join(name);
         gait_pipeline::atomic::write(&path, text.as_bytes())
-            .map_err(|e| CliError(format!("writing {}: {e}", path.display())))?;
+            .map_err(|e| CliError::new(format!("writing {}: {e}", path.display())))?;
     }
     Ok(())
 }

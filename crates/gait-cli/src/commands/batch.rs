@@ -76,7 +76,7 @@ enum Sub {
 }
 
 fn fail(e: gait_batch::BatchError) -> CliError {
-    CliError(one_line(&e.to_string()))
+    CliError::new(one_line(&e.to_string()))
 }
 
 pub fn execute(args: Args, models_dir: &Path) -> Result<ExitCode, CliError> {
@@ -86,7 +86,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<ExitCode, CliError> {
         Some(Sub::Aggregate { dir }) => aggregate(&dir),
         None => {
             let (Some(study), Some(out)) = (args.study.clone(), args.out.clone()) else {
-                return Err(CliError("give a study file and --out DIR".into()));
+                return Err(CliError::new("give a study file and --out DIR"));
             };
             submit(&args, &study, &out, models_dir)
         }
@@ -95,7 +95,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<ExitCode, CliError> {
 
 fn launcher(models_dir: &Path) -> Result<Launcher, CliError> {
     let exe = std::env::current_exe()
-        .map_err(|e| CliError(format!("cannot find the gait executable ({e})")))?;
+        .map_err(|e| CliError::new(format!("cannot find the gait executable ({e})")))?;
     let models = std::path::absolute(models_dir).unwrap_or_else(|_| models_dir.to_path_buf());
     Ok(Launcher {
         exe,
@@ -109,7 +109,7 @@ fn submit(args: &Args, study: &Path, out: &Path, models_dir: &Path) -> Result<Ex
         slurm::check_sbatch().map_err(fail)?;
     }
     if args.split_frames == 0 {
-        return Err(CliError("--split-frames must be at least 1".into()));
+        return Err(CliError::new("--split-frames must be at least 1"));
     }
     let study = Study::read(study).map_err(fail)?;
     let (plan, configs) = Plan::make(&study, out, args.split_frames).map_err(fail)?;
@@ -119,7 +119,7 @@ fn submit(args: &Args, study: &Path, out: &Path, models_dir: &Path) -> Result<Ex
     if let Some(jobs) = slurm::Jobs::read(out) {
         let busy = slurm::queued(&jobs.ids());
         if !busy.is_empty() {
-            return Err(CliError(format!(
+            return Err(CliError::new(format!(
                 "{}: this batch still has jobs in the queue ({}); wait for them or `scancel {}`",
                 out.display(),
                 jobs.ids().join(", "),
@@ -243,7 +243,7 @@ fn task(
     let plan = Plan::read(out).map_err(fail)?;
     let row = plan
         .row(index)
-        .ok_or_else(|| CliError(format!("{}: no row {index} in the batch", out.display())))?;
+        .ok_or_else(|| CliError::new(format!("{}: no row {index} in the batch", out.display())))?;
     let config = Plan::config(out, row).map_err(fail)?;
     let opts = RunOptions {
         input: row.video.clone(),

@@ -39,7 +39,7 @@ enum SideArg {
 
 pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
     if !(args.fps.is_finite() && args.fps > 0.0) {
-        return Err(CliError(format!(
+        return Err(CliError::new(format!(
             "--fps {} must be a positive frame rate",
             args.fps
         )));
@@ -47,7 +47,7 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
     let config = PipelineConfig::load(args.config.as_deref(), &[])?;
     let read = |p: &Path| {
         gait_eval::read_poses(p, args.fps, None)
-            .map_err(|e| CliError(format!("{}: {}", p.display(), one_line(&e.to_string()))))
+            .map_err(|e| CliError::new(format!("{}: {}", p.display(), one_line(&e.to_string()))))
     };
     let (truth, pred) = (read(&args.truth)?, read(&args.pred)?);
     let opts = EvalOptions {
@@ -65,12 +65,12 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
         &config.kinematics,
         &opts,
     )
-    .map_err(|e| CliError(one_line(&e.to_string())))?;
+    .map_err(|e| CliError::new(one_line(&e.to_string())))?;
     for w in &eval.warnings {
         eprintln!("warning: {w}");
     }
     let files = gait_eval::write_eval(&[eval], &args.out)
-        .map_err(|e| CliError(one_line(&e.to_string())))?;
+        .map_err(|e| CliError::new(one_line(&e.to_string())))?;
     for f in files {
         eprintln!("{}", f.display());
     }

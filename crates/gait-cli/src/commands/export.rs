@@ -22,7 +22,7 @@ pub struct Args {
 
 pub fn execute(args: Args) -> Result<(), CliError> {
     if !args.run_dir.is_dir() {
-        return Err(CliError(format!(
+        return Err(CliError::new(format!(
             "{}: not a folder; give the output folder of `gait run` or `gait kin`",
             args.run_dir.display()
         )));
@@ -41,19 +41,21 @@ pub fn execute(args: Args) -> Result<(), CliError> {
             .map(|f| {
                 f.trim()
                     .parse()
-                    .map_err(|e: String| CliError(format!("--format: {e}")))
+                    .map_err(|e: String| CliError::new(format!("--format: {e}")))
             })
             .collect::<Result<_, _>>()?
     };
     if let Some(f) = args.fps
         && !(f.is_finite() && f > 0.0)
     {
-        return Err(CliError(format!("--fps {f} must be a positive frame rate")));
+        return Err(CliError::new(format!(
+            "--fps {f} must be a positive frame rate"
+        )));
     }
     let facts = RunFacts::of_dir(&args.run_dir, args.fps)
-        .map_err(|e| CliError(one_line(&e.to_string())))?;
+        .map_err(|e| CliError::new(one_line(&e.to_string())))?;
     let written = export_run(&args.run_dir, &formats, &facts)
-        .map_err(|e| CliError(one_line(&e.to_string())))?;
+        .map_err(|e| CliError::new(one_line(&e.to_string())))?;
     for p in written {
         eprintln!("wrote {}", p.display());
     }

@@ -33,7 +33,7 @@ pub struct Args {
 
 pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
     if !(args.fps.is_finite() && args.fps > 0.0) {
-        return Err(CliError(format!(
+        return Err(CliError::new(format!(
             "--fps {} must be a positive frame rate",
             args.fps
         )));
@@ -43,7 +43,7 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
         config.kinematics.corrections = Some(c.clone());
     }
     let file = std::fs::File::open(&args.keypoints).map_err(|e| {
-        CliError(format!(
+        CliError::new(format!(
             "{}: cannot open ({e}); check the --keypoints path",
             args.keypoints.display()
         ))
@@ -54,7 +54,7 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
         args.fps,
     )
     .map_err(|e| {
-        CliError(format!(
+        CliError::new(format!(
             "{}: {}",
             args.keypoints.display(),
             one_line(&e.to_string())

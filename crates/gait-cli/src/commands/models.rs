@@ -75,7 +75,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                     repos[0].revision = revision;
                     if let Some(f) = file {
                         if repos.len() != 1 || repos[0].files.len() != 1 {
-                            return Err(CliError(format!(
+                            return Err(CliError::new(format!(
                                 "--file applies to single-file models (hed, openpose), not `{name}`"
                             )));
                         }
@@ -89,14 +89,14 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                             cn.revision = controlnet_revision;
                         }
                         None if controlnet_repo.is_some() || controlnet_revision != "main" => {
-                            return Err(CliError(format!(
+                            return Err(CliError::new(format!(
                                 "--controlnet-repo/--controlnet-revision apply to sd15-controlnet-canny only, not `{name}`"
                             )));
                         }
                         None => {}
                     }
                     hub::fetch(&repos, models_dir)
-                        .map_err(|e| CliError(one_line(&e.to_string())))?
+                        .map_err(|e| CliError::new(one_line(&e.to_string())))?
                 }
                 None if repo.is_some()
                     || file.is_some()
@@ -104,7 +104,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                     || revision != "main"
                     || controlnet_revision != "main" =>
                 {
-                    return Err(CliError(format!(
+                    return Err(CliError::new(format!(
                         "`{name}` does not come from the Hugging Face Hub: --repo, --revision, --file and the --controlnet-* options do not apply"
                     )));
                 }
@@ -149,10 +149,10 @@ fn present(name: &str, models_dir: &Path) -> bool {
 fn fetch_other(name: &str, models_dir: &Path) -> Result<Vec<std::path::PathBuf>, CliError> {
     match name {
         "blazepose" => gait_pose::blazepose::fetch::fetch(models_dir)
-            .map_err(|e| CliError(one_line(&e.to_string()))),
+            .map_err(|e| CliError::new(one_line(&e.to_string()))),
         other => {
             let known: Vec<&str> = MODELS.iter().map(|(n, _)| *n).collect();
-            Err(CliError(format!(
+            Err(CliError::new(format!(
                 "unknown model `{other}`; known models: {}",
                 known.join(", ")
             )))

@@ -35,12 +35,12 @@ pub struct Args {
 }
 
 pub fn execute(args: Args) -> Result<(), CliError> {
-    let fail = |e: gait_review::ReviewError| CliError(one_line(&e.to_string()));
+    let fail = |e: gait_review::ReviewError| CliError::new(one_line(&e.to_string()));
     let src = match (&args.run_dir, &args.keypoints) {
         (Some(dir), _) => {
             if args.config.is_some() || args.corrections.is_some() || args.fps.is_some() {
-                return Err(CliError(
-                    "--config, --corrections and --fps go with --keypoints; a run folder has its own (run.json, corrections.toml)".into(),
+                return Err(CliError::new(
+                    "--config, --corrections and --fps go with --keypoints; a run folder has its own (run.json, corrections.toml)",
                 ));
             }
             ReviewSource::from_run_dir(dir, args.video.as_deref()).map_err(fail)?
@@ -48,7 +48,7 @@ pub fn execute(args: Args) -> Result<(), CliError> {
         (None, Some(kp)) => {
             let fps = args.fps.unwrap_or(0.0);
             if !(fps.is_finite() && fps > 0.0) {
-                return Err(CliError(format!(
+                return Err(CliError::new(format!(
                     "--fps {fps} must be a positive frame rate"
                 )));
             }
@@ -62,8 +62,8 @@ pub fn execute(args: Args) -> Result<(), CliError> {
             .map_err(fail)?
         }
         (None, None) => {
-            return Err(CliError(
-                "give a run folder (gait review RUN_DIR) or --keypoints FILE --fps N".into(),
+            return Err(CliError::new(
+                "give a run folder (gait review RUN_DIR) or --keypoints FILE --fps N",
             ));
         }
     };
