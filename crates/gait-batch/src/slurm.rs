@@ -53,6 +53,40 @@ impl Jobs {
     }
 }
 
+/// Seconds before the time limit at which Slurm warns a task (SIGUSR1): time to finish the
+/// frame in flight (a ControlNet frame on a GPU takes seconds), requeue, and exit.
+pub const WARN_BEFORE_LIMIT_S: u32 = 120;
+
+/// What every task asks of Slurm: run again after a node failure or preemption (`--requeue`),
+/// and a warning to the task itself (`B:`: our script `exec`s gait) before the time limit.
+fn requeue_args() -> [String; 2] {
+    [
+        "--requeue".into(),
+        format!("--signal=B:USR1@{WARN_BEFORE_LIMIT_S}"),
+    ]
+}
+
+/// Puts the calling task back in Slurm's queue (it stopped at the time-limit warning); the
+/// requeued task resumes from the cache.
+pub fn requeue_self() -> Result<(), BatchError> {
+    let Ok(id) = std::env::var("SLURM_JOB_ID") else {
+        return Ok(());
+    };
+    let out = Command::new("scontrol")
+        .args(["requeue", &id])
+        .output()
+        .map_err(|e| BatchError::Slurm(format!("scontrol could not run: {e}")))?;
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        return Err(BatchError::Slurm(format!(
+            "scontrol requeue {id} failed: {}",
+            err.split_whitespace().collect::<Vec<_>>().join(" ")
+        )));
+    }
+    eprintln!("requeued slurm job {id}: it resumes from the cache");
+    Ok(())
+}
+
 /// `sbatch` must be on the PATH for `--executor slurm`.
 pub fn check_sbatch() -> Result<(), BatchError> {
     match Command::new("sbatch").arg("--version").output() {
@@ -159,7 +193,9 @@ pub fn submit(
         by_gpu.entry(r.gpu).or_default().push(r.index);
     }
     let base = |gpu: bool, job: &str, log: &str| {
-        let mut a = opts.slurm_args.clone();
+        // The user's options come after ours, so theirs win (sbatch takes the last).
+        let mut a: Vec<String> = requeue_args().into();
+        a.extend(opts.slurm_args.iter().cloned());
         a.extend(named(job, log));
         if gpu {
             a.push("--gres=gpu:1".into());

@@ -233,7 +233,9 @@ fn aggregate(out: &Path) -> Result<ExitCode, CliError> {
 }
 
 /// One task: a part of a split row's regeneration, or a row's run (as `gait run`). A failure is
-/// recorded in the run folder before the task exits.
+/// recorded in the run folder before the task exits. A signal stops it after the frame in
+/// flight; Slurm's time-limit warning (SIGUSR1, see `gait_batch::slurm`) also requeues it, and
+/// the requeued task resumes from the cache.
 fn task(
     out: &Path,
     index: usize,
@@ -245,13 +247,15 @@ fn task(
         .row(index)
         .ok_or_else(|| CliError::new(format!("{}: no row {index} in the batch", out.display())))?;
     let config = Plan::config(out, row).map_err(fail)?;
+    let handle = gait_pipeline::RunHandle::default();
+    crate::interrupt::install(&handle);
     let opts = RunOptions {
         input: row.video.clone(),
         out: gait_batch::run_dir(out, row),
         models_dir: models_dir.to_path_buf(),
         progress: false,
         command: std::env::args().collect(),
-        handle: None,
+        handle: Some(handle),
     };
     let result = match part {
         Some(p) => gait_pipeline::regenerate_part(&config, &opts, p, plan.split_frames)
@@ -262,12 +266,18 @@ fn task(
             crate::commands::run::run_and_report(&config, &opts)
         }
     };
-    if let Err(e) = &result {
-        let what = match part {
-            Some(p) => format!("part {p} of the regeneration: {e}"),
-            None => e.to_string(),
-        };
-        let _ = state::record_failure(out, row, &what);
+    match &result {
+        Err(_) if crate::interrupt::time_limit_warning() => slurm::requeue_self().map_err(fail)?,
+        // Stopped, not failed: the task (or its requeue) resumes from the cache.
+        Err(_) if crate::interrupt::exit_code().is_some() => {}
+        Err(e) => {
+            let what = match part {
+                Some(p) => format!("part {p} of the regeneration: {e}"),
+                None => e.to_string(),
+            };
+            let _ = state::record_failure(out, row, &what);
+        }
+        Ok(()) => {}
     }
     result.map(|()| ExitCode::SUCCESS)
 }
