@@ -278,7 +278,8 @@ fn corrupt_cache_entries_are_recomputed_with_a_warning() {
     let out = dir.path().join("run");
     run_ok(&mut run_args(&out, 100, 119));
     let before = std::fs::read(out.join("keypoints.csv")).unwrap();
-    // Flip a byte in two entries and cut one short: poses and the people of a frame.
+    // Flip a byte in some entries and cut others short: poses, tracker states and the people
+    // of a frame.
     let entries: Vec<std::path::PathBuf> = ["pose-", "subject-"]
         .iter()
         .flat_map(|prefix| {
@@ -303,10 +304,14 @@ fn corrupt_cache_entries_are_recomputed_with_a_warning() {
             .unwrap_or_else(|| panic!("no cache entry {stage}*/{name} in {entries:?}"))
             .clone()
     };
+    // The tracker's state after frame 108 too: recomputing 109 needs it, so it is rebuilt
+    // by estimating 108 again (not by starting the tracker afresh, which would change 109).
     let corrupted = [
         pick("pose-", "000105.json"),
         pick("pose-", "000112.json"),
         pick("subject-", "000110.json"),
+        pick("pose-", "000108.state"),
+        pick("pose-", "000109.json"),
     ];
     for (k, path) in corrupted.iter().enumerate() {
         let mut bytes = std::fs::read(path).unwrap();

@@ -26,6 +26,14 @@ pub(crate) fn chain_key(previous: &str, stage: &str, config: &impl Serialize) ->
 }
 
 /// One stage's folder in the cache, or nothing when caching is off.
+/// A tracking state in the cache.
+pub(crate) enum Saved {
+    Ok(Vec<u8>),
+    Missing,
+    /// There, but truncated or altered (reported as a warning).
+    Corrupt,
+}
+
 pub(crate) struct StageCache {
     dir: Option<PathBuf>,
     /// Entries found corrupt (and recomputed), for run.json's warnings.
@@ -237,6 +245,16 @@ impl StageCache {
     /// A pose estimator's tracking state saved after frame `index`.
     pub(crate) fn load_state(&self, index: usize) -> Option<Vec<u8>> {
         self.read(index, "state")
+    }
+
+    /// Like [`Self::load_state`], telling a state never saved from one that failed its checksum.
+    pub(crate) fn saved_state(&self, index: usize) -> Saved {
+        match self.file(index, "state") {
+            Some(path) if path.exists() => {
+                self.read(index, "state").map_or(Saved::Corrupt, Saved::Ok)
+            }
+            _ => Saved::Missing,
+        }
     }
 
     pub(crate) fn store_state(&self, index: usize, state: &[u8]) -> Result<(), PipelineError> {

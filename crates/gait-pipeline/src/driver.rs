@@ -81,6 +81,9 @@ pub(crate) struct Driver<'a> {
     pub(crate) subject: Option<&'a BTreeMap<usize, PersonBox>>,
     /// The frame a stateful regenerator redrew last (its state follows it).
     pub(crate) last_regenerated: Option<usize>,
+    /// The batch before the current one: a tracker's state lost to a corrupt
+    /// cache entry is rebuilt from these frames.
+    pub(crate) recent: Vec<Frame>,
 }
 
 impl Driver<'_> {
@@ -139,12 +142,9 @@ impl Driver<'_> {
                 let run = &seen[start..end];
                 let previous = self.order.previous(run[0].index);
                 if previous.is_none() || self.last_estimated != previous {
-                    // Resuming: restore the tracker as it was after the
-                    // previous frame, so results equal an uninterrupted run.
-                    let saved = previous.and_then(|p| self.caches.pose.load_state(p));
-                    if !saved.is_some_and(|s| self.stages.pose.restore(&s)) {
-                        self.stages.pose.reset();
-                    }
+                    // Resuming: the tracker as it was after the previous
+                    // frame, so results equal an uninterrupted run.
+                    self.resume_tracker(previous, frames)?;
                 }
                 // A stateful estimator goes frame by frame so that its state
                 // after every frame can be saved with that frame's pose.
@@ -212,7 +212,7 @@ impl Driver<'_> {
     }
 
     /// The frames the pose model should see: regenerated (or cached) ones.
-    fn regenerated(&mut self, frames: &[&Frame]) -> Result<Vec<Frame>, PipelineError> {
+    pub(crate) fn regenerated(&mut self, frames: &[&Frame]) -> Result<Vec<Frame>, PipelineError> {
         let identity = self.config.regenerator.is_identity();
         let mut out: Vec<Option<Frame>> = frames
             .iter()
@@ -354,7 +354,7 @@ impl Driver<'_> {
             if batch.len() == batch_size || (is_last && !batch.is_empty()) {
                 let poses = self.process(&batch)?;
                 out.extend(batch.iter().map(|f| f.index).zip(poses));
-                batch.clear();
+                self.recent = std::mem::replace(&mut batch, Vec::with_capacity(batch_size));
             }
             if is_last {
                 break;

@@ -23,6 +23,7 @@ pub mod registry;
 pub mod runner;
 pub mod selection;
 mod subject;
+mod tracker;
 mod video_decoder;
 
 pub use cache::{entry_bytes as cache_entry_bytes, read_entry as read_cache_entry};

@@ -134,6 +134,7 @@ impl Passes<'_> {
             order,
             last_estimated: None,
             last_regenerated: None,
+            recent: Vec::new(),
             cached_frames: BTreeSet::new(),
             original_poses,
             subject: self.subject,
