@@ -1,0 +1,105 @@
+"""Faults on the real one-node Slurm of the tests (tools/batch/slurm.sh): the node set down while
+tasks run (Slurm kills and requeues them), and Slurm's time-limit warning (SIGUSR1, which the
+batch asks for with --signal) after which a task requeues itself. The batch must finish by
+itself (`gait batch --wait` exits 0) with every row the undisturbed run's results."""
+import json
+import os
+import socket
+import subprocess
+import time
+
+import races
+import runs
+
+
+def _scontrol(*args):
+    return subprocess.run(["scontrol", *args], capture_output=True, text=True)
+
+
+def _tasks(job):
+    """(task id, state) of a job array's tasks in the queue."""
+    q = subprocess.run(["squeue", "-h", "-r", "-o", "%i %T", "-j", job], capture_output=True, text=True)
+    return [tuple(l.split()) for l in q.stdout.splitlines() if l.strip()]
+
+
+def _running(job):
+    return [t for t, s in _tasks(job) if s == "RUNNING"]
+
+
+def _nudge(job):
+    """A requeued task waits ~2 minutes (Slurm's own delay) before it may start again; in the
+    quick mode it is let start now. Nothing else about the requeue changes."""
+    for t, s in _tasks(job):
+        if s == "PENDING":
+            _scontrol("update", f"jobid={t}", "starttime=now")
+
+
+def run(gait, ref, work, events, quick, log):
+    """A 3-row study on Slurm; `events` faults, alternating node-down and time-limit warnings,
+    each while a task has made some progress."""
+    study = races._study(gait, work / "slurm-study.csv", 3)
+    out = work / "slurm"
+    batch = subprocess.Popen(
+        races._batch_args(gait, study, out, ["--executor", "slurm", "--wait"]),
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    jobs = out / "batch" / "jobs.json"
+    runs.wait_for(lambda: jobs.exists() and json.loads(jobs.read_text())["runs"], batch, timeout=60)
+    job = json.loads(jobs.read_text())["runs"][0]["id"]
+    node = socket.gethostname().split(".")[0]
+    rows = []
+    for i in range(events):
+        kind = "node down" if i % 2 == 0 else "time-limit warning"
+        # Some progress first, so the fault interrupts work (a new entry since the last event).
+        before = runs.count(out / "cache", "regenerator")
+        hit = runs.wait_for(
+            lambda: _running(job) and runs.count(out / "cache", "regenerator") > before + 1,
+            batch, timeout=600, every=0.2,
+        )
+        row = {"event": kind, "tasks_running": _running(job)}
+        if not hit:
+            row["ok"] = False
+            row["why"] = "no task was running"
+            rows.append(row)
+            log(f"slurm {i + 1}/{events}: {kind}: FAILED, no task was running")
+            continue
+        if kind == "node down":
+            _scontrol("update", f"nodename={node}", "state=down", "reason=fault-injection")
+            time.sleep(3)
+            _scontrol("update", f"nodename={node}", "state=resume")
+        else:
+            for t in row["tasks_running"]:
+                subprocess.run(["scancel", "--signal=USR1", "--batch", t], check=False)
+        # Requeued: the tasks that ran are pending again (Restarts counts it).
+        runs.wait_for(lambda: not _running(job) or any(s == "PENDING" for _, s in _tasks(job)), timeout=60, every=0.2)
+        time.sleep(2)
+        shown = _scontrol("show", "job", job).stdout
+        row["restarts"] = max((int(w.split("=")[1]) for w in shown.split() if w.startswith("Restarts=")), default=0)
+        if quick:
+            _nudge(job)
+        row["ok"] = row["restarts"] > 0
+        log(f"slurm {i + 1}/{events}: {kind} while {' '.join(row['tasks_running'])} ran: "
+            f"requeued (restarts {row['restarts']})")
+        rows.append(row)
+    end = time.monotonic() + 1800
+    while batch.poll() is None and time.monotonic() < end:
+        if quick:
+            _nudge(job)
+        time.sleep(2)
+    code = batch.wait()
+    names = [f"S01_{r + 1}_left_sports2d-demo" for r in range(3)]
+    diffs = {n: runs.differences(ref, out / "runs" / n) for n in names}
+    bad = runs.bad_entries(out / "cache")
+    finished = code == 0 and not any(diffs.values()) and not bad
+    for row in rows:
+        row["batch_exit"] = code
+        row["ok"] = row["ok"] and finished
+    log(f"slurm batch: `gait batch --wait` exit {code}, rows differing "
+        f"{[n for n, d in diffs.items() if d]}, {len(bad)} bad entries -> {'ok' if finished else 'FAILED'}")
+    if not finished:
+        log(batch.stderr.read()[-2000:])
+    return rows
+
+
+def available():
+    return bool(os.environ.get("SLURM_CONF"))
