@@ -25,9 +25,10 @@ def _sizes(ref):
 
     files = {p.name: _allocated(p) for p in ref.iterdir() if p.is_file()}
     subject, edge, regen, pose = (stage(s) for s in ["subject", "edge", "regenerator", "pose"])
-    caches = subject + edge + regen + pose + 64 * 4096
+    caches = subject + edge + regen + pose
     csvs = sum(v for k, v in files.items() if k.endswith(".csv"))
-    before_overlay = caches + csvs + sum(files.get(k, 0) for k in ["run.json", "keypoints.c3d"])
+    exports = sum(files.get(k, 0) for k in ["run.json", "keypoints.c3d", "keypoints.trc", "angles.mot"])
+    before_overlay = caches + csvs + exports
     return [
         ("subject cache", subject // 2),
         ("regeneration cache", subject + edge // 2 + regen // 2),
@@ -88,20 +89,47 @@ def _plant(path, how):
     path.write_bytes(bytes(data))
 
 
+# What a rerun reads, and so must find corrupt and recompute: a frame's pose; its pose and its
+# redrawn image; those and its edge map; the people found in it (the subject pass); the tracker's
+# state after the frame before it with its pose. (An entry no rerun needs is never read: the
+# redrawn image of a frame whose pose is whole, for one.)
+PLANS = [
+    [("pose", 0, "json")],
+    [("pose", 0, "json"), ("regenerator", 0, "png")],
+    [("pose", 0, "json"), ("regenerator", 0, "png"), ("edge", 0, "png")],
+    [("subject", 0, "json")],
+    [("pose", -1, "state"), ("pose", 0, "json")],
+]
+
+
+def _entry(cache, stage, frame, ext):
+    found = [d / f"{frame:06d}.{ext}" for d in cache.iterdir() if d.name.startswith(stage + "-")]
+    return found[0] if found and found[0].exists() else None
+
+
 def corruptions(gait, ref, work, n, rng, log):
-    """`n` corrupt entries (truncated, a flipped byte, emptied), planted in copies of the
-    undisturbed run in rounds of 5, each round rerun: every one must be reported and the
-    results must be the undisturbed run's."""
+    """`n` corrupt entries (truncated, a flipped byte, emptied), planted per PLANS in copies of
+    the undisturbed run, a few frames a round, each round rerun: every one must be reported and
+    recomputed, and the results must be the undisturbed run's."""
     rows = []
     ways = ["truncate", "flip", "empty"]
-    for r in range(-(-n // 5)):
+    first = int(gait.sets[0].split("=")[1])
+    planted_total, r = 0, 0
+    while planted_total < n:
         out = work / f"corrupt{r}"
         shutil.copytree(ref, out)
-        # Rerunning a run recomputes only what its cache lacks: entries a rerun reads.
-        pool = [f for f in runs.entries(out / "cache") if f.suffix != ".state"]
-        picked = rng.sample(pool, min(5, n - 5 * r))
+        cache = out / "cache"
+        frames = rng.sample(range(first + 1, first + gait.frames), 4)
+        picked = []
+        for k, f in enumerate(frames):
+            plan = PLANS[(4 * r + k) % len(PLANS)]
+            paths = [_entry(cache, st, f + d, ext) for st, d, ext in plan]
+            if None in paths or planted_total + len(picked) + len(paths) > n:
+                continue
+            picked += paths
         for k, f in enumerate(picked):
-            _plant(f, ways[(5 * r + k) % 3])
+            _plant(f, ways[(planted_total + k) % 3])
+        planted_total += len(picked)
         code, err = gait.run(out)
         warned = set(re.findall(r"cache entry (\S+) failed its checksum", err))
         row = {
@@ -109,12 +137,13 @@ def corruptions(gait, ref, work, n, rng, log):
             "reported": sum(str(p) in warned for p in picked),
             "exit": code,
             "differences": runs.differences(ref, out) if code == 0 else [err.strip()[-300:]],
-            "bad_entries": runs.bad_entries(out / "cache"),
+            "bad_entries": runs.bad_entries(cache),
         }
         row["ok"] = code == 0 and row["reported"] == len(picked) and not row["differences"] and not row["bad_entries"]
         log(f"corruption round {r + 1}: {len(picked)} planted, {row['reported']} reported and recomputed"
             f" -> {'ok' if row['ok'] else 'FAILED ' + json.dumps(row)}")
         rows.append(row)
+        r += 1
     return rows
 
 

@@ -11,37 +11,42 @@ import runs
 STEPS = ["subject", "regeneration", "poses", "kinematics", "report", "export"]
 
 
-def _trigger(step, out, frames, rng, ref_seconds):
+def _trigger(step, out, done, rng, ref_seconds):
     """When to send the signal during `step`: a predicate on the run folder, and a delay after it
-    holds. The step actually hit is read from the folder afterwards (`_hit`)."""
+    holds. `done`: the entries of each stage the undisturbed run cached (the frames with the
+    subject in view). The step actually hit is read from the folder afterwards (`_hit`)."""
     cache = out / "cache"
-    k = rng.randint(1, frames - 1)
+
+    def partway(stage):
+        k = rng.randint(1, max(1, done[stage] - 1))
+        return lambda: runs.count(cache, stage) >= k
+
     if step == "subject":
-        return (lambda: runs.count(cache, "subject") >= k), 0.0
+        return partway("subject"), 0.0
     if step == "regeneration":
-        return (lambda: runs.count(cache, "regenerator") >= k), 0.0
+        return partway("regenerator"), 0.0
     if step == "poses":
-        return (lambda: runs.count(cache, "pose") >= k), 0.0
+        return partway("pose"), 0.0
     if step == "kinematics":
-        return (lambda: runs.count(cache, "pose") >= frames), rng.uniform(0, 0.3)
+        return (lambda: runs.count(cache, "pose") >= done["pose"]), rng.uniform(0, 0.3)
     if step == "report":
-        return (lambda: (out / "angles.csv").exists()), rng.uniform(0, ref_seconds)
-    return (lambda: (out / "overlay.mp4").exists()), rng.uniform(0, 0.05)
+        return (lambda: (out / "angles.mot").exists()), rng.uniform(0, ref_seconds)
+    return (lambda: (out / "keypoints_filtered.csv").exists()), rng.uniform(0, 0.05)
 
 
-def _hit(out, frames):
+def _hit(out, done):
     """The step a stopped run was in, from what it left."""
     cache = out / "cache"
-    for step, done in [
-        ("subject", runs.count(cache, "subject") >= frames),
-        ("regeneration", runs.count(cache, "regenerator") >= frames),
-        ("poses", runs.count(cache, "pose") >= frames),
+    for step, finished in [
+        ("subject", runs.count(cache, "subject") >= done["subject"]),
+        # A batch's frames are redrawn, then their poses found: the two steps interleave.
+        ("regeneration and poses", runs.count(cache, "pose") >= done["pose"]),
         ("kinematics", (out / "spatiotemporal.csv").exists()),
-        ("report (overlay)", (out / "overlay.mp4").exists()),
         ("export", (out / "angles.mot").exists()),
-        ("report (html, pdf)", (out / "report.pdf").exists()),
+        ("report: overlay.mp4", (out / "overlay.mp4").exists()),
+        ("report: html and pdf", (out / "report.pdf").exists()),
     ]:
-        if not done:
+        if not finished:
             return step
     return "after the end"
 
@@ -50,13 +55,14 @@ def run(gait, ref, work, n, rng, log):
     """`n` kills, cycling through the steps and alternating SIGKILL and SIGTERM."""
     report = json.loads((ref / "run.json").read_text())["report"]["seconds"]
     ref_seconds = sum(report.values())
+    done = {stage: runs.count(ref / "cache", stage) for stage in ["subject", "regenerator", "pose"]}
     rows = []
     for i in range(n):
         step = STEPS[i % len(STEPS)]
         # Alternating, and shifted each round, so every step gets both signals.
         sig = signal.SIGKILL if (i + i // len(STEPS)) % 2 == 0 else signal.SIGTERM
         out = work / f"kill{i:03d}"
-        when, delay = _trigger(step, out, gait.frames, rng, ref_seconds)
+        when, delay = _trigger(step, out, done, rng, ref_seconds)
         proc = gait.start(out)
         reached = runs.wait_for(when, proc)
         if reached and delay:
@@ -70,9 +76,10 @@ def run(gait, ref, work, n, rng, log):
         else:
             code = proc.returncode
         runs.stop_group(proc)
-        row["exit"] = code
+        # Popen gives -N for a process the signal N ended; a shell says 128 + N.
+        row["exit"] = 128 - code if code < 0 else code
         row["injected"] = code != 0
-        row["hit"] = _hit(out, gait.frames) if row["injected"] else "after the end"
+        row["hit"] = _hit(out, done) if row["injected"] else "after the end"
         if sig == signal.SIGTERM and row["injected"]:
             manifest = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else {}
             row["says_interrupted"] = manifest.get("status") == "interrupted"

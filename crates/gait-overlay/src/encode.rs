@@ -188,6 +188,20 @@ pub(crate) fn one_line(stderr: &[u8], fallback: &str) -> String {
     }
 }
 
+/// ffmpeg can exit 0 after its output failed (a full disk while muxing): the file is cut
+/// short. Its own messages say so.
+fn failed_write(stderr: &[u8]) -> bool {
+    let text = String::from_utf8_lossy(stderr);
+    [
+        "No space left on device",
+        "Disk quota exceeded",
+        "Error writing trailer",
+        "Error closing file",
+    ]
+    .iter()
+    .any(|m| text.contains(m))
+}
+
 /// A running ffmpeg that encodes the frames it is sent.
 pub(crate) struct Ffmpeg {
     child: Child,
@@ -315,7 +329,7 @@ impl Ffmpeg {
             .unwrap_or_default();
         self.done = true;
         let status = status.map_err(OverlayError::io("waiting for ffmpeg"))?;
-        if !status.success() {
+        if !status.success() || failed_write(&err) {
             return Err(OverlayError::Ffmpeg(one_line(&err, &status.to_string())));
         }
         match written {
@@ -348,6 +362,13 @@ impl Drop for Ffmpeg {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_full_disk_is_a_failure_even_when_ffmpeg_exits_0() {
+        let err = b"[mp4 @ 0x1] Error writing trailer of x.mp4: No space left on device\n";
+        assert!(failed_write(err));
+        assert!(!failed_write(b"frame=  8 fps=0.0 q=-1.0 Lsize=  135kB\n"));
+    }
 
     /// The head and a few lines of Debian ffmpeg 5.1's `-encoders` output.
     const LISTING: &str = "Encoders:

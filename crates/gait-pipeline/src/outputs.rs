@@ -22,6 +22,8 @@ pub struct OutputOptions<'a> {
     /// Frame rate, when the folder has no run.json (`gait kin`).
     pub fps: Option<f64>,
     pub progress: bool,
+    /// Stops the overlay between frames, and the PDF before it starts (a signal, Ctrl-C).
+    pub handle: Option<&'a crate::RunHandle>,
 }
 
 /// What was written, and what the user should know.
@@ -53,7 +55,8 @@ pub fn write_outputs(o: &OutputOptions) -> Result<Outputs, PipelineError> {
         && let Some(input) = o.input
     {
         let t = Instant::now();
-        let (path, warnings) = crate::overlay::write_overlay(o.dir, input, o.config, o.progress)?;
+        let (path, warnings) =
+            crate::overlay::write_overlay(o.dir, input, o.config, o.progress, o.handle)?;
         out.seconds.insert("overlay", t.elapsed().as_secs_f64());
         out.files.push(path);
         out.warnings.extend(warnings);
@@ -64,6 +67,7 @@ pub fn write_outputs(o: &OutputOptions) -> Result<Outputs, PipelineError> {
     out.report = report.write(o.dir).map_err(|e| failed("report.html", e))?;
     out.seconds.insert("report", t.elapsed().as_secs_f64());
     if let Some(browser) = chromium {
+        stop_point(o.handle, "report.pdf")?;
         let t = Instant::now();
         let pdf = o.dir.join("report.pdf");
         gait_eval::pdf::print_pdf(&browser, &out.report, &pdf)
@@ -73,6 +77,17 @@ pub fn write_outputs(o: &OutputOptions) -> Result<Outputs, PipelineError> {
     }
     record(o.dir, &report, &out.seconds)?;
     Ok(out)
+}
+
+/// The error that ends a run its handle stopped, before `step`.
+pub(crate) fn stop_point(
+    handle: Option<&crate::RunHandle>,
+    step: &str,
+) -> Result<(), PipelineError> {
+    match handle {
+        Some(h) if h.is_stopped() => Err(PipelineError::Interrupted { step: step.into() }),
+        _ => Ok(()),
+    }
 }
 
 /// The Chromium to print with, per `[report] pdf`: required when true, used
@@ -114,8 +129,9 @@ fn build_report(o: &OutputOptions, with_pdf: bool) -> Result<Report, PipelineErr
         report.exports.push("report.pdf".into());
     }
     if let Some(s) = &report.scores {
-        crate::atomic::write(&o.dir.join("scores.csv"), s.csv().as_bytes())
-            .map_err(|e| failed("scores.csv", e))?;
+        let path = o.dir.join("scores.csv");
+        crate::atomic::write(&path, s.csv().as_bytes())
+            .map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))?;
     }
     Ok(report)
 }
@@ -150,5 +166,6 @@ fn record(
         );
     }
     let text = serde_json::to_string_pretty(&v).map_err(|e| failed("run.json", e))?;
-    crate::atomic::write(&path, text.as_bytes()).map_err(|e| failed("run.json", e))
+    crate::atomic::write(&path, text.as_bytes())
+        .map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))
 }

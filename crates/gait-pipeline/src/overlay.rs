@@ -49,6 +49,7 @@ pub(crate) fn write_overlay(
     input: &Path,
     config: &PipelineConfig,
     progress: bool,
+    handle: Option<&crate::RunHandle>,
 ) -> Result<(PathBuf, Vec<String>), PipelineError> {
     let run = marks_from_run_dir(dir).map_err(failed)?;
     let info = InputInfo::open(input)?;
@@ -75,6 +76,8 @@ pub(crate) fn write_overlay(
     let mut marks = run.marks.iter().peekable();
     let mut reader = info.frames()?;
     while let Some(frame) = reader.next_frame()? {
+        // Stopped: the writer's drop removes the unfinished file.
+        crate::outputs::stop_point(handle, "overlay.mp4")?;
         // Marks of frames the video lacks (it ended early) are skipped.
         while marks.next_if(|m| m.frame < frame.index).is_some() {}
         let Some(m) = marks.next_if(|m| m.frame == frame.index) else {

@@ -470,6 +470,12 @@ pub fn run_and_write(
         config,
         fps: None,
         progress: opts.progress,
+        handle: opts.handle.as_ref(),
+    })
+    .inspect_err(|e| {
+        if let PipelineError::Interrupted { step } = e {
+            write_interrupted(config, opts, summary.manifest.started_unix, step);
+        }
     })?;
     Ok((summary, outputs))
 }
@@ -505,6 +511,7 @@ pub fn kin_and_write(
         config,
         fps: Some(seq.fps),
         progress: false,
+        handle: None,
     })?;
     Ok((result, outputs))
 }

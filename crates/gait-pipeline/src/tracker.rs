@@ -25,7 +25,7 @@ impl Driver<'_> {
             Saved::Ok(s) if self.stages.pose.restore(&s) => return Ok(()),
             Saved::Corrupt => {
                 let frame = near.iter().chain(&self.recent).find(|f| f.index == p);
-                if let Some(frame) = frame.cloned().filter(|_| false) {
+                if let Some(frame) = frame.cloned() {
                     return self.estimate_again(frame, near);
                 }
             }
