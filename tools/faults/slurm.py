@@ -35,9 +35,10 @@ def _nudge(job):
 
 
 def run(gait, ref, work, events, quick, log):
-    """A 3-row study on Slurm; `events` faults, alternating node-down and time-limit warnings,
-    each while a task has made some progress."""
-    study = races._study(gait, work / "slurm-study.csv", 3)
+    """A study of `events + 1` rows on Slurm; `events` faults, alternating node-down and
+    time-limit warnings, each while a task runs and has made progress since the last."""
+    n_rows = events + 1
+    study = races._study(gait, work / "slurm-study.csv", n_rows)
     out = work / "slurm"
     batch = subprocess.Popen(
         races._batch_args(gait, study, out, ["--executor", "slurm", "--wait"]),
@@ -53,7 +54,7 @@ def run(gait, ref, work, events, quick, log):
         # Some progress first, so the fault interrupts work (a new entry since the last event).
         before = runs.count(out / "cache", "regenerator")
         hit = runs.wait_for(
-            lambda: _running(job) and runs.count(out / "cache", "regenerator") > before + 1,
+            lambda: _running(job) and runs.count(out / "cache", "regenerator") > before,
             batch, timeout=600, every=0.2,
         )
         row = {"event": kind, "tasks_running": _running(job)}
@@ -87,7 +88,7 @@ def run(gait, ref, work, events, quick, log):
             _nudge(job)
         time.sleep(2)
     code = batch.wait()
-    names = [f"S01_{r + 1}_left_sports2d-demo" for r in range(3)]
+    names = [f"S01_{r + 1}_left_sports2d-demo" for r in range(n_rows)]
     diffs = {n: runs.differences(ref, out / "runs" / n) for n in names}
     bad = runs.bad_entries(out / "cache")
     finished = code == 0 and not any(diffs.values()) and not bad
