@@ -13,6 +13,10 @@ bash tools/review/setup_puppeteer.sh >/dev/null
 eval "export $(bash tools/batch/slurm.sh up)"
 trap 'bash tools/batch/slurm.sh down' EXIT
 cargo test --workspace
+# Faults (issue 32): kills in every step, full disks, Slurm node-down and time-limit events,
+# concurrent writers and corrupt cache entries, each against the undisturbed run (quick mode).
+python3 tools/faults/inject.py --gait target/debug/gait --models "$GAIT_MODELS_DIR" \
+    --work target/faults --mode quick
 # The Python package (issue 31): its venv under target/, the wheel, pytest on the API, Python stages
 # (mediapipe's own BlazePose among them) and the example notebook.
 bash tools/python/test.sh
