@@ -16,6 +16,10 @@ need_apt=()
 command -v ffmpeg >/dev/null || need_apt+=(ffmpeg)
 [ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || need_apt+=(fonts-dejavu-core)
 command -v chromium >/dev/null || need_apt+=(chromium)
+# libjpeg-turbo's bundled build (the turbojpeg crate, gait-pipeline's JPEG reader): cmake, and
+# nasm for its SIMD code (what OpenCV and Pillow run).
+command -v cmake >/dev/null || need_apt+=(cmake)
+command -v nasm >/dev/null || need_apt+=(nasm)
 if [ ${#need_apt[@]} -gt 0 ]; then
   echo "setup: installing Debian packages: ${need_apt[*]}" >&2
   sudo_cmd=""

@@ -401,6 +401,13 @@ pub const TARGETS: &[Target] = &[
             "crates/gait-edge/tests/fixtures/hed/annotator_safe.png",
             "crates/gait-edge/tests/fixtures/hed/annotator.png",
             "fuzz/seeds/image/sample_frame_96px.jpg",
+            // The JPEG reader's cases (libjpeg-turbo, issue 33): progressive, restart
+            // markers with an Adobe marker, CMYK, an EXIF orientation, a file cut short.
+            "tests/data/jpeg/space_shuttle.jpg",
+            "tests/data/jpeg/photoshop-200dpi.jpg",
+            "tests/data/jpeg/pil_sample_cmyk.jpg",
+            "tests/data/jpeg/hopper_orientation_6.jpg",
+            "tests/data/jpeg/truncated_jpeg.jpg",
             "fuzz/seeds/image/testsrc_32x24.bmp",
             "fuzz/seeds/image/testsrc_32x24.tif",
         ],

@@ -9,6 +9,7 @@ use gait_core::Frame;
 use sha2::{Digest, Sha256};
 
 use crate::PipelineError;
+use crate::still;
 pub use crate::video_decoder::DecoderRecording;
 use crate::video_decoder::VideoDecoder;
 
@@ -27,7 +28,31 @@ pub struct InputInfo {
     pub fps: f64,
     /// Number of frames, when the container says.
     pub frames: Option<usize>,
+    /// Still images: how many have each EXIF orientation (1-8), applied when decoded.
+    pub orientations: std::collections::BTreeMap<u16, usize>,
     kind: Kind,
+    /// What the decoder had to say about damaged but readable stills (shared by the readers).
+    decode_warnings: DecodeWarnings,
+}
+
+/// Warnings of every reader of one input, e.g. a JPEG cut short ("Premature end of JPEG file").
+#[derive(Debug, Clone, Default)]
+struct DecodeWarnings(std::sync::Arc<std::sync::Mutex<Vec<String>>>);
+
+impl PartialEq for DecodeWarnings {
+    /// What was decoded so far does not make two inputs different.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl DecodeWarnings {
+    fn add(&self, warning: String) {
+        let mut w = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if !w.contains(&warning) {
+            w.push(warning);
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -87,16 +112,33 @@ impl InputInfo {
     }
 
     fn images(path: &Path, files: Vec<PathBuf>) -> Result<Self, PipelineError> {
-        let (width, height) = image::image_dimensions(&files[0])
-            .map_err(|e| PipelineError::input(&files[0], format!("unreadable image ({e})")))?;
+        let mut orientations = std::collections::BTreeMap::new();
+        let mut size = None;
+        for f in &files {
+            let (dims, o) = still::dimensions(f).map_err(|e| PipelineError::input(f, e))?;
+            size.get_or_insert(dims);
+            *orientations.entry(o).or_insert(0) += 1;
+        }
+        let (width, height) = size.unwrap_or_default();
         Ok(Self {
             path: path.to_path_buf(),
             width,
             height,
             fps: DEFAULT_IMAGE_FPS,
             frames: Some(files.len()),
+            orientations,
             kind: Kind::Images(files),
+            decode_warnings: DecodeWarnings::default(),
         })
+    }
+
+    /// The decoder's warnings so far (damaged but readable stills), one per file.
+    pub fn decode_warnings(&self) -> Vec<String> {
+        self.decode_warnings
+            .0
+            .lock()
+            .map(|w| w.clone())
+            .unwrap_or_default()
     }
 
     /// A content hash of the input, so cached results of another input (or
@@ -272,7 +314,9 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         height,
         fps,
         frames,
+        orientations: Default::default(),
         kind: Kind::Video,
+        decode_warnings: DecodeWarnings::default(),
     })
 }
 
@@ -297,9 +341,14 @@ impl FrameReader {
                 let Some(path) = files.get(index) else {
                     return Ok(None);
                 };
-                let img = image::open(path)
-                    .map_err(|e| PipelineError::input(path, format!("unreadable image ({e})")))?;
-                let img = img.to_rgb8();
+                let still = still::read(path).map_err(|e| PipelineError::input(path, e))?;
+                if let Some(w) = still.warning {
+                    let name = path.file_name().unwrap_or_default().to_string_lossy();
+                    self.info
+                        .decode_warnings
+                        .add(format!("{name}: damaged JPEG, decoded as OpenCV does ({w})"));
+                }
+                let img = still.image;
                 if (img.width(), img.height()) != (self.info.width, self.info.height) {
                     return Err(PipelineError::input(
                         path,

@@ -22,6 +22,7 @@ mod redraw;
 pub mod registry;
 pub mod runner;
 pub mod selection;
+pub mod still;
 mod subject;
 mod tracker;
 mod video_decoder;

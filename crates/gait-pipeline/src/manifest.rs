@@ -52,6 +52,10 @@ pub struct InputRecord {
     pub fps: f64,
     pub first_frame: usize,
     pub last_frame: Option<usize>,
+    /// Still images: how many had each EXIF orientation (1-8, as stored), applied as `cv2.imread`
+    /// does ("6": 3 is three photographs taken upright on a phone held sideways).
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub exif_orientation: BTreeMap<u16, usize>,
 }
 
 #[derive(Debug, Clone, Serialize)]

@@ -183,6 +183,7 @@ fn run_from(
     .run()?;
     warnings.extend(stages.regenerator.take_warnings());
     warnings.extend(caches.take_warnings());
+    warnings.extend(info.decode_warnings());
     if out.all.is_empty() {
         return Err(PipelineError::input(
             &opts.input,
@@ -209,6 +210,7 @@ fn run_from(
             fps,
             first_frame: config.input.first_frame,
             last_frame: config.input.last_frame,
+            exif_orientation: info.orientations.clone(),
         },
         config: serde_json::to_value(config).unwrap_or_default(),
         models: models.all(),
