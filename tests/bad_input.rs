@@ -99,6 +99,43 @@ fn unreadable_image() {
     );
 }
 
+/// A real JPEG (tests/data/jpeg) cut short or corrupt, alone or as one frame of a folder: one
+/// line naming the file, before anything runs.
+#[test]
+fn broken_jpegs_name_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = std::fs::read(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/jpeg/hopper.jpg"),
+    )
+    .unwrap();
+    let cut = dir.path().join("cut.jpg");
+    std::fs::write(&cut, &whole[..whole.len() / 2]).unwrap();
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    for (name, bytes) in [
+        ("f1.jpg", whole.clone()),
+        ("f2.jpg", [&whole[..4], &[0x55u8; 64][..]].concat()),
+        ("f3.jpg", whole.clone()),
+    ] {
+        std::fs::write(frames.join(name), bytes).unwrap();
+    }
+    for (input, needles) in [
+        (&cut, &["cut.jpg", "cut short"][..]),
+        (&frames, &["f2.jpg", "not a readable JPEG"][..]),
+    ] {
+        let out = dir.path().join("out");
+        fails_with(
+            gait()
+                .args(["run", "--no-progress", "--input"])
+                .arg(input)
+                .arg("--out")
+                .arg(&out),
+            needles,
+        );
+        assert_no_results(&out);
+    }
+}
+
 #[test]
 fn toml_syntax_error() {
     let dir = tempfile::tempdir().unwrap();

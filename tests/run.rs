@@ -335,3 +335,22 @@ fn corrupt_cache_entries_are_recomputed_with_a_warning() {
     // Recomputed, not used: the results are those of the first run.
     assert_eq!(std::fs::read(out.join("keypoints.csv")).unwrap(), before);
 }
+
+/// A photograph with EXIF orientation 6 (taken with the camera turned) is analysed as displayed,
+/// as `cv2.imread` reads it, and run.json records the orientation found. (That the pixels and the
+/// sizes are OpenCV's is tested in gait-pipeline's tests/still_images.rs.)
+#[test]
+fn an_exif_orientation_is_applied_and_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/data/jpeg/hopper_orientation_6.jpg");
+    let out = dir.path().join("run");
+    run_ok(&mut common::run_on(&photo, &out));
+    let manifest = read_json(&out.join("run.json"));
+    assert_eq!(
+        manifest["input"]["exif_orientation"],
+        serde_json::json!({"6": 1}),
+        "{}",
+        manifest["input"]
+    );
+}

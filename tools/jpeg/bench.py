@@ -5,7 +5,8 @@
 
 Makes a 1920x1080 JPEG of a real frame (frame 100 of the sample video, scaled by ffmpeg, written by
 cv2.imwrite at quality 95, 4:2:0) under target/jpeg-bench/, builds the release example
-`still_bench`, then alternates rounds: the Rust example (N reads: gait's reader, then the `image`
+`still_bench` (the dev profile: dependencies such as libjpeg-turbo and image are built optimised,
+as in the `gait` binary the tests use), then alternates rounds: the Rust example (N reads: gait's reader, then the `image`
 crate), and N `cv2.imread` in this process. Prints each round and the ratio of the medians."""
 import argparse
 import json
@@ -36,9 +37,9 @@ def main():
     ap.add_argument("--n", type=int, default=30)
     a = ap.parse_args()
     jpg = frame_1080p(ROOT / "target/jpeg-bench/frame_1080p.jpg")
-    subprocess.run(["cargo", "build", "-q", "--release", "-p", "gait-pipeline", "--example", "still_bench"],
+    subprocess.run(["cargo", "build", "-q", "-p", "gait-pipeline", "--example", "still_bench"],
                    cwd=ROOT, check=True)
-    exe = ROOT / "target/release/examples/still_bench"
+    exe = ROOT / "target/debug/examples/still_bench"
     gait, crate, cv = [], [], []
     for r in range(a.rounds):
         out = json.loads(subprocess.run([str(exe), str(jpg), str(a.n)], capture_output=True, text=True,

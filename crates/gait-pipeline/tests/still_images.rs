@@ -1,7 +1,7 @@
 //! JPEG stills decoded byte for byte as `cv2.imread(path, IMREAD_COLOR)` decodes them
 //! (opencv-python 4.10, libjpeg-turbo), EXIF orientation included, on the real files of
 //! tests/data/jpeg (4:4:4, 4:2:2, 4:2:0, 4:4:0, progressive, restart markers, grayscale,
-//! CMYK/YCCK, 16-bit tables, the eight orientations, a file cut short, photographs). The
+//! CMYK/YCCK, 16-bit tables, the eight orientations, photographs; a file cut short refused). The
 //! expected RGB digests were written by tools/jpeg/make_fixtures.py running OpenCV.
 
 use std::path::{Path, PathBuf};
@@ -27,7 +27,7 @@ fn every_jpeg_decodes_as_opencv_decodes_it() {
     let files = manifest();
     assert!(files.len() >= 20, "{} files", files.len());
     let mut wrong = Vec::new();
-    for (name, want) in &files {
+    for (name, want) in files.iter().filter(|(n, _)| *n != CUT_SHORT) {
         let still = gait_pipeline::still::read(&data().join(name))
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         let (w, h) = still.image.dimensions();
@@ -52,7 +52,7 @@ fn every_jpeg_decodes_as_opencv_decodes_it() {
 
 #[test]
 fn header_sizes_are_the_decoded_sizes() {
-    for (name, want) in manifest() {
+    for (name, want) in manifest().into_iter().filter(|(n, _)| n != CUT_SHORT) {
         let ((w, h), o) = gait_pipeline::still::dimensions(&data().join(&name)).unwrap();
         assert_eq!(
             (u64::from(w), u64::from(h), u64::from(o)),
@@ -66,11 +66,16 @@ fn header_sizes_are_the_decoded_sizes() {
     }
 }
 
+/// A real file cut short. OpenCV decodes it, grey where the data is missing (its digest is in
+/// the manifest); gait refuses it, so a half-grey frame is never analysed unnoticed.
+const CUT_SHORT: &str = "truncated_jpeg.jpg";
+
 #[test]
-fn a_file_cut_short_decodes_with_libjpegs_warning() {
-    let still = gait_pipeline::still::read(&data().join("truncated_jpeg.jpg")).unwrap();
-    let warning = still.warning.expect("a warning");
-    assert!(warning.contains("Premature end of JPEG file"), "{warning}");
+fn a_file_cut_short_is_refused() {
+    let Err(e) = gait_pipeline::still::read(&data().join(CUT_SHORT)) else {
+        panic!("{CUT_SHORT} decoded");
+    };
+    assert!(e.contains("cut short") && !e.contains('\n'), "{e}");
 }
 
 #[test]
@@ -85,10 +90,12 @@ fn broken_jpegs_are_one_line_errors() {
     for (name, bytes) in cases {
         let path = dir.path().join(name);
         std::fs::write(&path, bytes).unwrap();
-        match gait_pipeline::still::read(&path) {
-            Ok(s) => assert!(s.warning.is_some(), "{name}: decoded without a warning"),
-            Err(e) => assert!(!e.contains('\n') && !e.is_empty(), "{name}: {e:?}"),
-        }
+        let e = match gait_pipeline::still::read(&path) {
+            Ok(_) => panic!("{name} decoded"),
+            Err(e) => e,
+        };
+        assert!(!e.contains('\n') && !e.is_empty(), "{name}: {e:?}");
+        assert!(gait_pipeline::still::dimensions(&path).is_err() || name == "header_only.jpg");
     }
 }
 

@@ -4,9 +4,11 @@
 //! and Pillow's. Two cases need more than TurboJPEG's RGB output:
 //! - CMYK/YCCK files: TurboJPEG gives the (Adobe-inverted) CMYK values, turned
 //!   into RGB with OpenCV's integer formula;
-//! - a libjpeg warning (a file cut short: "Premature end of JPEG file") is not
-//!   fatal, as in OpenCV: the image is decoded with the missing part filled as
-//!   libjpeg fills it, and the warning is returned.
+//! - a libjpeg warning (e.g. "Corrupt JPEG data: extraneous bytes before
+//!   marker", common in camera files) is not fatal, as in OpenCV: the image is
+//!   decoded and the warning returned. A file cut short ("Premature end of JPEG
+//!   file") is refused, unlike OpenCV, which fills the missing part with grey:
+//!   a half-grey frame would be analysed without anyone noticing.
 
 use std::ffi::CStr;
 
@@ -66,6 +68,10 @@ fn header(h: &Handle, data: &[u8]) -> Result<(), String> {
     if r != 0 {
         return Err(h.error());
     }
+    // Garbage after a JPEG signature can pass as a header with no frame in it.
+    if size(h).0 == 0 || size(h).1 == 0 {
+        return Err("no image size in its header".into());
+    }
     Ok(())
 }
 
@@ -104,10 +110,16 @@ pub(crate) fn decode(data: &[u8]) -> Result<Decoded, String> {
     if r != 0 {
         // SAFETY: a valid handle.
         let code = unsafe { raw::tj3GetErrorCode(h.0) };
+        let message = h.error();
         if code != raw::TJERR_TJERR_WARNING as i32 {
-            return Err(h.error());
+            return Err(message);
         }
-        warning = Some(h.error());
+        if message.contains("Premature end") {
+            return Err(format!(
+                "the file is cut short ({message}); copy or export it again"
+            ));
+        }
+        warning = Some(message);
     }
     let rgb = if cmyk { cmyk_to_rgb(&buf) } else { buf };
     Ok(Decoded {
