@@ -344,9 +344,9 @@ impl FrameReader {
                 let still = still::read(path).map_err(|e| PipelineError::input(path, e))?;
                 if let Some(w) = still.warning {
                     let name = path.file_name().unwrap_or_default().to_string_lossy();
-                    self.info
-                        .decode_warnings
-                        .add(format!("{name}: damaged JPEG, decoded as OpenCV does ({w})"));
+                    self.info.decode_warnings.add(format!(
+                        "{name}: damaged JPEG, decoded as OpenCV does ({w})"
+                    ));
                 }
                 let img = still.image;
                 if (img.width(), img.height()) != (self.info.width, self.info.height) {

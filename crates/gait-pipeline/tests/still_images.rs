@@ -130,7 +130,10 @@ fn photographs_match_mediapipe(backend: gait_core::Backend) {
     for (name, entry) in images {
         let still = gait_pipeline::still::read(&data().join(name)).unwrap();
         let (w, h) = still.image.dimensions();
-        let pose = est.estimate(&[Frame::new(0, still.image)]).unwrap().remove(0);
+        let pose = est
+            .estimate(&[Frame::new(0, still.image)])
+            .unwrap()
+            .remove(0);
         let mut lower: Vec<f64> = entry["landmarks"].as_array().unwrap()[23..=32]
             .iter()
             .enumerate()

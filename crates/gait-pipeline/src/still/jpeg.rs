@@ -103,7 +103,7 @@ pub(crate) fn decode(data: &[u8]) -> Result<Decoded, String> {
             data.len() as _,
             buf.as_mut_ptr(),
             stride as i32,
-            format as i32,
+            format,
         )
     };
     let mut warning = None;

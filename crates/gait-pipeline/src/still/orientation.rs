@@ -106,7 +106,10 @@ mod tests {
             (q[0], q[1])
         };
         // (x, y) of the stored image found at the displayed (0, 0) and the displayed size.
-        assert_eq!((at(1, 0, 0), apply(img.clone(), 1).dimensions()), ((0, 0), (3, 2)));
+        assert_eq!(
+            (at(1, 0, 0), apply(img.clone(), 1).dimensions()),
+            ((0, 0), (3, 2))
+        );
         assert_eq!(at(2, 0, 0), (2, 0));
         assert_eq!(at(3, 0, 0), (2, 1));
         assert_eq!(at(4, 0, 0), (0, 1));
@@ -120,7 +123,10 @@ mod tests {
     #[test]
     fn no_exif_or_a_broken_one_is_1() {
         assert_eq!(exif_orientation(b"\xff\xd8\xff\xd9"), 1);
-        assert_eq!(exif_orientation(b"\xff\xd8\xff\xe1\x00\x08Exif\x00\x00\xff\xd9"), 1);
+        assert_eq!(
+            exif_orientation(b"\xff\xd8\xff\xe1\x00\x08Exif\x00\x00\xff\xd9"),
+            1
+        );
         assert_eq!(exif_orientation(b""), 1);
     }
 }
