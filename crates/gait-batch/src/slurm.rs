@@ -72,19 +72,28 @@ pub fn requeue_self() -> Result<(), BatchError> {
     let Ok(id) = std::env::var("SLURM_JOB_ID") else {
         return Ok(());
     };
-    let out = Command::new("scontrol")
-        .args(["requeue", &id])
+    run(
+        Command::new("scontrol").args(["requeue", &id]),
+        &format!("scontrol requeue {id} failed"),
+    )?;
+    eprintln!("requeued slurm job {id}: it resumes from the cache");
+    Ok(())
+}
+
+/// Runs a Slurm command; its stdout, or `failed: <its stderr on one line>`.
+fn run(cmd: &mut Command, failed: &str) -> Result<Vec<u8>, BatchError> {
+    let program = cmd.get_program().to_string_lossy().into_owned();
+    let out = cmd
         .output()
-        .map_err(|e| BatchError::Slurm(format!("scontrol could not run: {e}")))?;
+        .map_err(|e| BatchError::Slurm(format!("{program} could not run: {e}")))?;
     if !out.status.success() {
         let err = String::from_utf8_lossy(&out.stderr);
         return Err(BatchError::Slurm(format!(
-            "scontrol requeue {id} failed: {}",
+            "{failed}: {}",
             err.split_whitespace().collect::<Vec<_>>().join(" ")
         )));
     }
-    eprintln!("requeued slurm job {id}: it resumes from the cache");
-    Ok(())
+    Ok(out.stdout)
 }
 
 /// `sbatch` must be on the PATH for `--executor slurm`.
@@ -117,20 +126,14 @@ fn script(out: &Path, name: &str, command: &str) -> Result<std::path::PathBuf, B
 
 /// `sbatch --parsable ...`: the job id.
 fn sbatch(args: &[String], script: &Path) -> Result<String, BatchError> {
-    let out = Command::new("sbatch")
-        .arg("--parsable")
-        .args(args)
-        .arg(script)
-        .output()
-        .map_err(|e| BatchError::Slurm(format!("sbatch could not run: {e}")))?;
-    if !out.status.success() {
-        let err = String::from_utf8_lossy(&out.stderr);
-        return Err(BatchError::Slurm(format!(
-            "sbatch refused the batch: {}",
-            err.split_whitespace().collect::<Vec<_>>().join(" ")
-        )));
-    }
-    let text = String::from_utf8_lossy(&out.stdout);
+    let stdout = run(
+        Command::new("sbatch")
+            .arg("--parsable")
+            .args(args)
+            .arg(script),
+        "sbatch refused the batch",
+    )?;
+    let text = String::from_utf8_lossy(&stdout);
     // `--parsable` prints `id` or `id;cluster`.
     let id = text.trim().split(';').next().unwrap_or("").to_string();
     if id.is_empty() {
