@@ -78,6 +78,15 @@ fn a_file_cut_short_is_refused() {
     assert!(e.contains("cut short") && !e.contains('\n'), "{e}");
 }
 
+/// 12-bit samples: `cv2.imread` returns None; gait says what the file is, in one line.
+#[test]
+fn a_12_bit_jpeg_is_refused() {
+    let Err(e) = gait_pipeline::still::read(&data().join("refused/testorig12.jpg")) else {
+        panic!("a 12-bit JPEG decoded");
+    };
+    assert!(e.contains("not a readable JPEG") && !e.contains('\n'), "{e}");
+}
+
 #[test]
 fn broken_jpegs_are_one_line_errors() {
     let dir = tempfile::tempdir().unwrap();
