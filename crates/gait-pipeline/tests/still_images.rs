@@ -84,7 +84,10 @@ fn a_12_bit_jpeg_is_refused() {
     let Err(e) = gait_pipeline::still::read(&data().join("refused/testorig12.jpg")) else {
         panic!("a 12-bit JPEG decoded");
     };
-    assert!(e.contains("not a readable JPEG") && !e.contains('\n'), "{e}");
+    assert!(
+        e.contains("not a readable JPEG") && !e.contains('\n'),
+        "{e}"
+    );
 }
 
 #[test]

@@ -52,16 +52,30 @@ pub fn decode(data: &[u8]) -> Result<Still, String> {
 }
 
 /// Width and height as decoded (EXIF orientation applied), and the orientation, from the
-/// file's header.
+/// file's header (its first bytes: a folder of frames is checked without reading it whole).
 pub fn dimensions(path: &Path) -> Result<((u32, u32), u16), String> {
-    let data = std::fs::read(path).map_err(|e| format!("cannot read it ({e})"))?;
-    if is_jpeg(&data) {
-        let size = jpeg::dimensions(&data).map_err(|e| format!("not a readable JPEG ({e})"))?;
-        let o = orientation::exif_orientation(&data);
+    use std::io::Read;
+    const HEAD: u64 = 256 * 1024;
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(HEAD).read_to_end(&mut head))
+        .map_err(|e| format!("cannot read it ({e})"))?;
+    if is_jpeg(&head) {
+        // A header longer than the first bytes (large ICC profiles): read it all.
+        let size = match jpeg::dimensions(&head) {
+            Ok(size) => size,
+            Err(_) if head.len() as u64 == HEAD => {
+                let all = std::fs::read(path).map_err(|e| format!("cannot read it ({e})"))?;
+                head = all;
+                jpeg::dimensions(&head).map_err(|e| format!("not a readable JPEG ({e})"))?
+            }
+            Err(e) => return Err(format!("not a readable JPEG ({e})")),
+        };
+        let o = orientation::exif_orientation(&head);
         return Ok((orientation::oriented_size(size, o), o));
     }
-    let size = image::ImageReader::new(std::io::Cursor::new(&data))
-        .with_guessed_format()
+    let size = image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
         .map_err(|e| format!("unreadable image ({e})"))?
         .into_dimensions()
         .map_err(|e| format!("unreadable image ({e})"))?;
