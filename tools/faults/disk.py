@@ -120,12 +120,16 @@ def corruptions(gait, ref, work, n, rng, log):
         shutil.copytree(ref, out)
         cache = out / "cache"
         frames = rng.sample(range(first + 1, first + gait.frames), 4)
-        picked = []
+        picked, touched = [], set()
         for k, f in enumerate(frames):
             plan = PLANS[(4 * r + k) % len(PLANS)]
             paths = [_entry(cache, st, f + d, ext) for st, d, ext in plan]
-            if None in paths or planted_total + len(picked) + len(paths) > n:
+            # Plans on neighbouring frames would overlap: a frame recomputed for one plan
+            # rewrites the state another plan corrupted before it is read.
+            near = {f + d for _, d, _ in plan} | {f + 1}
+            if None in paths or near & touched or planted_total + len(picked) + len(paths) > n:
                 continue
+            touched |= near
             picked += paths
         for k, f in enumerate(picked):
             _plant(f, ways[(planted_total + k) % 3])
