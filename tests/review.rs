@@ -400,3 +400,36 @@ fn a_zero_shot_run_shows_its_regenerated_frames() {
     assert_eq!(server.get("/api/frame/151").0, 200);
     assert_eq!(server.get("/api/frame/149?kind=regenerated").0, 404);
 }
+
+/// Saving corrections into a folder a `gait run` is writing (it reads corrections.toml at its
+/// end) is refused at once, naming the run's pid; nothing is written.
+#[test]
+fn a_save_while_a_run_writes_the_folder_is_refused() {
+    let work = tempfile::tempdir().unwrap();
+    let run = copy_run(&work.path().join("run"));
+    let server = Server::start(&[run.as_os_str()]);
+    let mut writer = common::sample_run(&run, 40, 200)
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let lock = run.join(".gait.lock");
+    let pid = writer.id().to_string();
+    let start = std::time::Instant::now();
+    while !std::fs::read_to_string(&lock).is_ok_and(|t| t.starts_with(&pid)) {
+        assert!(
+            start.elapsed().as_secs() < 60 && writer.try_wait().unwrap().is_none(),
+            "the run never took the folder"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let (status, body) = server.request(
+        "POST",
+        &format!("/api/corrections?token={}", server.token()),
+        r#"{"event":[{"side":"right","kind":"heel_strike","frame":60,"action":"add"}]}"#,
+    );
+    let _ = writer.kill();
+    let _ = writer.wait();
+    assert_eq!(status, 400, "{body}");
+    assert!(body.contains(&pid) && body.contains("in use"), "{body}");
+    assert!(!run.join("corrections.toml").exists());
+}
