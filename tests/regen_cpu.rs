@@ -140,3 +140,54 @@ fn regenerated(out: &Path) -> BTreeMap<String, Vec<u8>> {
         })
         .collect()
 }
+
+/// The cache entry `name` of the stage whose folder starts with `stage`.
+fn entry(out: &Path, stage: &str, name: &str) -> std::path::PathBuf {
+    std::fs::read_dir(out.join("cache"))
+        .unwrap()
+        .flatten()
+        .find(|e| e.file_name().to_string_lossy().starts_with(stage))
+        .map(|e| e.path().join(name))
+        .filter(|p| p.exists())
+        .unwrap_or_else(|| panic!("no {stage}*/{name}"))
+}
+
+/// A corrupt saved state of the regenerator (`init = "previous"`) is rebuilt by redrawing its
+/// frame again from the state before it, not by starting afresh: the next frame, redrawn again,
+/// is the uninterrupted run's, and so are the keypoints.
+#[test]
+fn a_corrupt_regenerator_state_is_rebuilt() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let run = || {
+        let mut cmd = common::sample_run(&out, 100, 109);
+        for s in cpu_sets() {
+            cmd.args(["--set", &s]);
+        }
+        cmd
+    };
+    run_ok(&mut run());
+    let redrawn = entry(&out, "regenerator-", "000105.png");
+    let (image, keypoints) = (
+        std::fs::read(&redrawn).unwrap(),
+        std::fs::read(out.join("keypoints.csv")).unwrap(),
+    );
+    // The state after 104 flipped; 105's redrawn frame and pose cut short, so 105 is redrawn
+    // and needs that state.
+    let state = entry(&out, "regenerator-", "000104.state");
+    let mut bytes = std::fs::read(&state).unwrap();
+    bytes[2] ^= 0x40;
+    std::fs::write(&state, bytes).unwrap();
+    for path in [redrawn.clone(), entry(&out, "pose-", "000105.json")] {
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+    }
+    run_ok(&mut run());
+    let warnings = read_json(&out.join("run.json"))["warnings"].to_string();
+    assert!(warnings.contains("000104.state"), "{warnings}");
+    assert!(
+        std::fs::read(&redrawn).unwrap() == image,
+        "frame 105 redrawn differently"
+    );
+    assert_eq!(std::fs::read(out.join("keypoints.csv")).unwrap(), keypoints);
+}

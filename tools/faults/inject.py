@@ -44,7 +44,8 @@ def main():
     if disk.needs_root() or not slurm.available():
         sys.exit("inject: needs root (tmpfs, node state) and SLURM_CONF (tools/batch/slurm.sh up)")
     mode = MODES[a.mode]
-    work = pathlib.Path(a.work or tempfile.mkdtemp(prefix="gait-faults-"))
+    # Absolute: the runs print their folder, and the comparisons take it out.
+    work = pathlib.Path(a.work or tempfile.mkdtemp(prefix="gait-faults-")).resolve()
     work.mkdir(parents=True, exist_ok=True)
     rng = random.Random(a.seed)
     gait = runs.Gait(pathlib.Path(a.gait).resolve(), pathlib.Path(a.models).resolve(), mode["frames"])

@@ -117,13 +117,13 @@ def _manifest(text, run_dir):
             return [clean(x) for x in v if not (isinstance(x, str) and "failed its checksum" in x)]
         return v
 
-    v = json.loads(text.replace(str(run_dir), "@RUN@"))
+    v = json.loads(text.replace(str(pathlib.Path(run_dir).resolve()), "@RUN@"))
     v.get("config", {}).get("run", {}).pop("cache_dir", None)
     return clean(v)
 
 
 def _report(text, run_dir):
-    text = text.replace(str(run_dir), "@RUN@")
+    text = text.replace(str(pathlib.Path(run_dir).resolve()), "@RUN@")
     text = re.sub(r"<h2>Run manifest \(run.json\)</h2><pre>.*?</pre>", "", text, flags=re.S)
     return re.sub(r"<li>cache entry [^<]*failed its checksum[^<]*</li>", "", text)
 

@@ -242,12 +242,8 @@ impl StageCache {
         })
     }
 
-    /// A pose estimator's tracking state saved after frame `index`.
-    pub(crate) fn load_state(&self, index: usize) -> Option<Vec<u8>> {
-        self.read(index, "state")
-    }
-
-    /// Like [`Self::load_state`], telling a state never saved from one that failed its checksum.
+    /// A stateful stage's state saved after frame `index`, telling a state never saved from one
+    /// that failed its checksum.
     pub(crate) fn saved_state(&self, index: usize) -> Saved {
         match self.file(index, "state") {
             Some(path) if path.exists() => {

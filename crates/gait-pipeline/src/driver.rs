@@ -81,8 +81,8 @@ pub(crate) struct Driver<'a> {
     pub(crate) subject: Option<&'a BTreeMap<usize, PersonBox>>,
     /// The frame a stateful regenerator redrew last (its state follows it).
     pub(crate) last_regenerated: Option<usize>,
-    /// The batch before the current one: a tracker's state lost to a corrupt
-    /// cache entry is rebuilt from these frames.
+    /// The current batch and the one before: a stateful stage's state lost to
+    /// a corrupt cache entry is rebuilt from these frames.
     pub(crate) recent: Vec<Frame>,
 }
 
@@ -144,7 +144,7 @@ impl Driver<'_> {
                 if previous.is_none() || self.last_estimated != previous {
                     // Resuming: the tracker as it was after the previous
                     // frame, so results equal an uninterrupted run.
-                    self.resume_tracker(previous, frames)?;
+                    self.resume_tracker(previous)?;
                 }
                 // A stateful estimator goes frame by frame so that its state
                 // after every frame can be saved with that frame's pose.
@@ -352,9 +352,14 @@ impl Driver<'_> {
                 batch.push(frame);
             }
             if batch.len() == batch_size || (is_last && !batch.is_empty()) {
+                // The frames a stateful stage may have to see again (a corrupt saved state):
+                // this batch and the one before.
+                self.recent.extend(batch.iter().cloned());
+                let older = self.recent.len().saturating_sub(2 * batch_size);
+                self.recent.drain(..older);
                 let poses = self.process(&batch)?;
                 out.extend(batch.iter().map(|f| f.index).zip(poses));
-                self.recent = std::mem::replace(&mut batch, Vec::with_capacity(batch_size));
+                batch.clear();
             }
             if is_last {
                 break;

@@ -93,10 +93,7 @@ impl Driver<'_> {
     fn redraw_in_order(&mut self, frame: &Frame) -> Result<Vec<Frame>, PipelineError> {
         let previous = self.order.previous(frame.index);
         if previous.is_none() || previous != self.last_regenerated {
-            let saved = previous.and_then(|p| self.caches.regenerator.load_state(p));
-            if !saved.is_some_and(|s| self.stages.regenerator.restore(&s)) {
-                self.stages.regenerator.reset();
-            }
+            self.resume_regenerator(previous)?;
         }
         let out = self.redraw_batch(std::slice::from_ref(frame))?;
         // State first: a redrawn frame on disk always has its state beside it.

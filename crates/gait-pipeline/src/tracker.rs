@@ -1,7 +1,9 @@
-//! A tracking pose estimator resumed mid-pass. Its state after the previous
-//! frame comes from the cache; when that saved state fails its checksum, it
-//! is rebuilt by estimating the previous frame again (from its own
-//! predecessor's state), so the poses equal those of an uninterrupted run.
+//! Stateful stages resumed mid-pass: a tracking pose estimator, and a
+//! regenerator that starts each frame from the one before (`init =
+//! "previous"`). A stage's state after the previous frame comes from the
+//! cache; when that saved state fails its checksum, it is rebuilt by running
+//! the stage on the previous frame again (from its own predecessor's state),
+//! so the results equal those of an uninterrupted run.
 
 use gait_core::Frame;
 
@@ -11,12 +13,8 @@ use crate::driver::Driver;
 
 impl Driver<'_> {
     /// Puts the pose tracker where it was after frame `previous` (`None`: start
-    /// afresh). `near` are the frames of the current batch.
-    pub(crate) fn resume_tracker(
-        &mut self,
-        previous: Option<usize>,
-        near: &[Frame],
-    ) -> Result<(), PipelineError> {
+    /// afresh).
+    pub(crate) fn resume_tracker(&mut self, previous: Option<usize>) -> Result<(), PipelineError> {
         let Some(p) = previous else {
             self.stages.pose.reset();
             return Ok(());
@@ -24,9 +22,8 @@ impl Driver<'_> {
         match self.caches.pose.saved_state(p) {
             Saved::Ok(s) if self.stages.pose.restore(&s) => return Ok(()),
             Saved::Corrupt => {
-                let frame = near.iter().chain(&self.recent).find(|f| f.index == p);
-                if let Some(frame) = frame.cloned() {
-                    return self.estimate_again(frame, near);
+                if let Some(frame) = self.recent_frame(p) {
+                    return self.estimate_again(frame);
                 }
             }
             // Never saved: the frame had no estimate (out of view), so the
@@ -39,9 +36,9 @@ impl Driver<'_> {
 
     /// Estimates `frame` again from its predecessor's state, to rebuild (and
     /// save again) the tracking state after it; the pose itself is cached.
-    fn estimate_again(&mut self, frame: Frame, near: &[Frame]) -> Result<(), PipelineError> {
+    fn estimate_again(&mut self, frame: Frame) -> Result<(), PipelineError> {
         // Each step goes one frame back in the pass's order, so this ends.
-        self.resume_tracker(self.order.previous(frame.index), near)?;
+        self.resume_tracker(self.order.previous(frame.index))?;
         let index = frame.index;
         let seen = if self.regenerate {
             self.regenerated(&[&frame])?
@@ -59,5 +56,35 @@ impl Driver<'_> {
             self.caches.pose.store_state(index, &state)?;
         }
         Ok(())
+    }
+
+    /// Puts a stateful regenerator where it was after frame `previous` (`None`: start afresh).
+    pub(crate) fn resume_regenerator(
+        &mut self,
+        previous: Option<usize>,
+    ) -> Result<(), PipelineError> {
+        let Some(p) = previous else {
+            self.stages.regenerator.reset();
+            return Ok(());
+        };
+        match self.caches.regenerator.saved_state(p) {
+            Saved::Ok(s) if self.stages.regenerator.restore(&s) => return Ok(()),
+            Saved::Corrupt => {
+                if let Some(frame) = self.recent_frame(p) {
+                    // Redrawn again in order (from its predecessor's state), which saves
+                    // its state anew; the redrawn image itself is cached already.
+                    self.redraw(&[frame])?;
+                    return Ok(());
+                }
+            }
+            _ => {}
+        }
+        self.stages.regenerator.reset();
+        Ok(())
+    }
+
+    /// Frame `index`, when it is still in memory (this batch or the one before).
+    fn recent_frame(&self, index: usize) -> Option<Frame> {
+        self.recent.iter().find(|f| f.index == index).cloned()
     }
 }
