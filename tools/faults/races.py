@@ -11,9 +11,9 @@ import runs
 def _second_writer(gait, ref, work, i, log, batch):
     out = work / f"race{i}"
     if batch:
-        study = _study(gait, work / f"race{i}-study.csv", 1)
-        first = subprocess.Popen(_batch_args(gait, study, out, []), stderr=subprocess.PIPE, start_new_session=True)
-        second_args = _batch_args(gait, study, out, [])
+        study = write_study(gait, work / f"race{i}-study.csv", 1)
+        first = subprocess.Popen(batch_args(gait, study, out, []), stderr=subprocess.PIPE, start_new_session=True)
+        second_args = batch_args(gait, study, out, [])
         lock = out / ".gait.lock"
     else:
         first = gait.start(out)
@@ -56,10 +56,10 @@ def _shared_cache(gait, ref, work, i, log, writers):
 
 
 def _split(gait, ref, work, i, log, parts):
-    study = _study(gait, work / f"race{i}-study.csv", 1)
+    study = write_study(gait, work / f"race{i}-study.csv", 1)
     out = work / f"race{i}"
     done = subprocess.run(
-        _batch_args(gait, study, out, ["--split-frames", str(parts), "--jobs", str(parts)]),
+        batch_args(gait, study, out, ["--split-frames", str(parts), "--jobs", str(parts)]),
         capture_output=True,
         text=True,
     )
@@ -76,7 +76,8 @@ def _row_name():
     return "S01_1_left_sports2d-demo"
 
 
-def _study(gait, path, rows):
+def write_study(gait, path, rows):
+    """A study file of `rows` rows of the script's pipeline (sessions 1, 2, ...)."""
     lines = ["video,subject,session,view,prosthetic_side,config,set"]
     for r in range(rows):
         sets = gait.study_sets().replace('"', '""')
@@ -85,7 +86,7 @@ def _study(gait, path, rows):
     return path
 
 
-def _batch_args(gait, study, out, extra):
+def batch_args(gait, study, out, extra):
     return [gait.exe, "--models-dir", gait.models, "batch", str(study), "--out", str(out), *extra]
 
 

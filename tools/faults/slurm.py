@@ -38,10 +38,10 @@ def run(gait, ref, work, events, quick, log):
     """A study of `events + 1` rows on Slurm; `events` faults, alternating node-down and
     time-limit warnings, each while a task runs and has made progress since the last."""
     n_rows = events + 1
-    study = races._study(gait, work / "slurm-study.csv", n_rows)
+    study = races.write_study(gait, work / "slurm-study.csv", n_rows)
     out = work / "slurm"
     batch = subprocess.Popen(
-        races._batch_args(gait, study, out, ["--executor", "slurm", "--wait"]),
+        races.batch_args(gait, study, out, ["--executor", "slurm", "--wait"]),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     jobs = out / "batch" / "jobs.json"

@@ -25,8 +25,7 @@ pub(crate) fn chain_key(previous: &str, stage: &str, config: &impl Serialize) ->
     hex(&h.finalize())
 }
 
-/// One stage's folder in the cache, or nothing when caching is off.
-/// A tracking state in the cache.
+/// A stateful stage's saved state in the cache.
 pub(crate) enum Saved {
     Ok(Vec<u8>),
     Missing,
@@ -34,6 +33,7 @@ pub(crate) enum Saved {
     Corrupt,
 }
 
+/// One stage's folder in the cache, or nothing when caching is off.
 pub(crate) struct StageCache {
     dir: Option<PathBuf>,
     /// Entries found corrupt (and recomputed), for run.json's warnings.
