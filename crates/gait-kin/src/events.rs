@@ -7,6 +7,8 @@ use serde::{Deserialize, Serialize};
 use crate::KinError;
 use crate::config::Side;
 use crate::direction::Direction;
+pub use crate::peaks::find_peaks;
+use crate::peaks::{Peak, gait_peaks};
 use crate::tracks::Tracks;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -73,6 +75,10 @@ pub struct ZeniRefined {
     pub min_stride_s: f64,
     /// Shortest stance, heel strike to toe-off of one foot, as a share of the stride.
     pub min_stance_share: f64,
+    /// A peak of the foot's excursion is a stride when its prominence is at least this share
+    /// of the median prominence of the foot's peaks (and at least 0.1 leg lengths); see
+    /// [`crate::peaks::gait_peaks`].
+    pub excursion_share: f64,
 }
 
 impl Default for ZeniRefined {
@@ -87,58 +93,9 @@ impl Default for ZeniRefined {
             // prosthetic side). A toe-off at under 30 % cannot be walking: it comes from
             // mislabelled legs. Half the shortest real stance leaves room for timing errors.
             min_stance_share: 0.3,
+            excursion_share: 0.5,
         }
     }
-}
-
-/// Local maxima with at least `prominence`, at least `min_dist` samples apart (larger wins).
-/// NaN splits the signal; extrema at the ends of a run are not peaks.
-pub fn find_peaks(x: &[f64], prominence: f64, min_dist: usize) -> Vec<usize> {
-    let n = x.len();
-    let mut peaks = Vec::new();
-    let mut i = 1;
-    while i + 1 < n {
-        if !(x[i].is_finite() && x[i - 1].is_finite()) || x[i] <= x[i - 1] {
-            i += 1;
-            continue;
-        }
-        // Plateau: take its middle.
-        let mut j = i;
-        while j + 1 < n && x[j + 1] == x[i] {
-            j += 1;
-        }
-        if j + 1 < n && x[j + 1].is_finite() && x[j + 1] < x[i] {
-            let p = (i + j) / 2;
-            // Prominence: height above the higher of the two minima down to a higher point.
-            let side_min = |range: &mut dyn Iterator<Item = usize>| {
-                let mut m = x[p];
-                for k in range {
-                    if !x[k].is_finite() || x[k] > x[p] {
-                        break;
-                    }
-                    m = m.min(x[k]);
-                }
-                m
-            };
-            let left = side_min(&mut (0..p).rev());
-            let right = side_min(&mut (p + 1..n));
-            if x[p] - left.max(right) >= prominence {
-                peaks.push(p);
-            }
-        }
-        i = j + 1;
-    }
-    // Enforce the minimum distance, highest peaks first.
-    let mut order = peaks.clone();
-    order.sort_by(|&a, &b| x[b].total_cmp(&x[a]));
-    let mut keep: Vec<usize> = Vec::new();
-    for p in order {
-        if keep.iter().all(|&k| k.abs_diff(p) >= min_dist) {
-            keep.push(p);
-        }
-    }
-    keep.sort_unstable();
-    keep
 }
 
 /// Forward speed (pixels/s) of keypoint `j` at frame `i` by central differences; NaN at the ends,
@@ -287,7 +244,8 @@ impl ZeniRefined {
             (lo..=hi).all(|i| dirs.get(i) == dirs.get(p))
         };
         let mut out = Vec::new();
-        for p in find_peaks(&heel_rel, prom, min_dist) {
+        let (heel_peaks, _) = gait_peaks(&heel_rel, prom, self.excursion_share, min_dist);
+        for Peak { index: p, .. } in heel_peaks {
             if stable(p) {
                 out.push(Event {
                     side,
@@ -296,7 +254,8 @@ impl ZeniRefined {
                 });
             }
         }
-        for p in find_peaks(&toe_back, prom, min_dist) {
+        let (toe_peaks, _) = gait_peaks(&toe_back, prom, self.excursion_share, min_dist);
+        for Peak { index: p, .. } in toe_peaks {
             if stable(p) {
                 out.push(Event {
                     side,
@@ -492,16 +451,6 @@ mod tests {
         let mut e = vec![ev(l, hs, 10), ev(l, to, 11)];
         drop_implausible_toe_offs(&mut e, 0.3);
         assert_eq!(e.len(), 2);
-    }
-
-    #[test]
-    fn peaks_need_prominence_and_distance() {
-        let x = [0.0, 1.0, 0.0, 5.0, 4.9, 5.1, 0.0, f64::NAN, 3.0, 0.0];
-        assert_eq!(find_peaks(&x, 0.5, 1), vec![1, 5]);
-        assert_eq!(find_peaks(&x, 2.0, 1), vec![5]);
-        assert_eq!(find_peaks(&x, 0.5, 5), vec![5]);
-        assert_eq!(find_peaks(&[f64::NAN, 0.0, 3.0, 0.0], 1.0, 1), vec![2]);
-        assert!(find_peaks(&[1.0, 2.0, 3.0], 0.0, 1).is_empty());
     }
 
     #[test]

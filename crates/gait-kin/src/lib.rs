@@ -33,6 +33,7 @@ mod input_check;
 pub mod likelihood;
 pub mod one_euro;
 mod output;
+pub mod peaks;
 pub mod quality;
 pub mod smooth;
 pub mod spatiotemporal;
