@@ -129,6 +129,9 @@ pub struct KinResult {
     pub events: Vec<Event>,
     /// True when the events came from `kinematics.events_csv`.
     pub events_from_file: bool,
+    /// Per side, the keypoints the events were detected on (`heel strike/toe-off`): the heel
+    /// and the toe, or the ankle for a model without feet.
+    pub event_keypoints: std::collections::BTreeMap<String, String>,
     /// Candidate strides: consecutive heel strikes of a foot within the stride time limits.
     pub strides: Vec<Stride>,
     /// The quality verdict on each candidate stride, in the order of `strides`.
@@ -256,6 +259,7 @@ fn run_chain(
             "no walking bout found: the events of events_csv are used as given".into()
         });
     }
+    let event_keypoints = event_keypoints(t, kin, &mut warnings);
     let (mut events, from_file) = match &kin.events_csv {
         Some(p) => (events::read_csv(p)?, true),
         None => (steps.events.detect(t, &dirs.per_frame), false),
@@ -318,6 +322,7 @@ fn run_chain(
         bouts,
         events,
         events_from_file: from_file,
+        event_keypoints,
         strides,
         cycle_quality,
         cycles_accepted,
@@ -470,6 +475,33 @@ fn directions(t: &Tracks, warnings: &mut Vec<String>) -> direction::Directions {
             .push("walking direction unknown in every frame: no angles, events or cycles".into());
     }
     dirs
+}
+
+/// The keypoints each side's events come from, with a warning where a model without feet leaves
+/// only the ankle (none when the events come from a file).
+fn event_keypoints(
+    t: &Tracks,
+    kin: &KinematicsConfig,
+    warnings: &mut Vec<String>,
+) -> std::collections::BTreeMap<String, String> {
+    let mut out = std::collections::BTreeMap::new();
+    if kin.events_csv.is_some() || t.is_empty() {
+        return out;
+    }
+    for side in Side::BOTH {
+        let Some(k) = events::EventKeypoints::of(t, side) else {
+            continue;
+        };
+        let used = k.describe(t);
+        if t.names[k.heel_strike].ends_with("_ankle") || t.names[k.toe_off].ends_with("_ankle") {
+            warnings.push(format!(
+                "no {0} heel or toe keypoint in any frame: {0} events from {used} (Zeni's method on the ankle)",
+                side.name()
+            ));
+        }
+        out.insert(side.name().to_string(), used);
+    }
+    out
 }
 
 /// Without a toe there is no foot segment: say so instead of leaving the reader to wonder why

@@ -65,7 +65,7 @@ pub fn compute(
     let heel_x = |side: Side, frame: usize| -> Option<f64> {
         let i = frame.checked_sub(t.first_frame)?;
         let j = t
-            .leg_index(side, "heel")
+            .seen_leg_index(side, "heel")
             .or_else(|| t.leg_index(side, "ankle"))?;
         t.at(j, i).map(|p| p.0)
     };

@@ -99,6 +99,14 @@ impl Tracks {
         self.index(&format!("{}_{part}", side.name()))
     }
 
+    /// As [`Self::leg_index`], only for a keypoint seen in some frame: a model without feet
+    /// (COCO-17, COCO-18) has empty heel and toe columns in gait's own keypoints.csv, and a
+    /// column that is there but never filled must not stand in for one the model gives.
+    pub fn seen_leg_index(&self, side: Side, part: &str) -> Option<usize> {
+        self.leg_index(side, part)
+            .filter(|&j| self.x[j].iter().any(|v| v.is_finite()))
+    }
+
     /// The point `j` at frame `i` when both coordinates are present.
     pub fn at(&self, j: usize, i: usize) -> Option<(f64, f64)> {
         let (x, y) = (*self.x.get(j)?.get(i)?, self.y[j][i]);

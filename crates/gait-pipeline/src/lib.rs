@@ -3,6 +3,7 @@
 //! the runner that drives frames through the stages.
 
 pub use gait_core::atomic;
+mod beside;
 mod cache;
 pub mod config;
 mod driver;
@@ -27,6 +28,7 @@ mod subject;
 mod tracker;
 mod video_decoder;
 
+pub use beside::RunBeside;
 pub use cache::{entry_bytes as cache_entry_bytes, read_entry as read_cache_entry};
 pub use config::PipelineConfig;
 pub use error::PipelineError;

@@ -190,6 +190,10 @@ impl ReviewSource {
         corrections: Option<&Path>,
     ) -> Result<Self, ReviewError> {
         let seq = read_keypoints(keypoints, fps)?;
+        // A run's keypoints.csv: its run.json gives the run's settings and frame size, so the
+        // page shows the run's events and cycles (as `gait kin` on the same file does).
+        let beside = gait_pipeline::RunBeside::find(keypoints)?;
+        let config = config.or(beside.as_ref().map(|b| b.manifest.as_path()));
         let config = PipelineConfig::load(config, &[])?;
         let video = match video {
             Some(v) => check_video(v, None),
@@ -199,7 +203,8 @@ impl ReviewSource {
             .as_ref()
             .ok()
             .and_then(|v| InputInfo::open(v).ok())
-            .map(|i| [i.width, i.height]);
+            .map(|i| [i.width, i.height])
+            .or_else(|| beside.and_then(|b| b.frame_size));
         let corrections_path = corrections.map_or_else(
             || keypoints.with_file_name("corrections.toml"),
             Path::to_path_buf,

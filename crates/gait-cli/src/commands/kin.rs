@@ -8,16 +8,18 @@ use crate::error::{CliError, one_line};
 /// exports and report.html.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Keypoints in DeepLabCut's CSV layout (e.g. a run's keypoints.csv)
+    /// Keypoints in DeepLabCut's CSV layout (e.g. a run's keypoints.csv: its run.json beside
+    /// it gives the frame rate, the frame size and the run's settings)
     #[arg(long, value_name = "FILE")]
     keypoints: PathBuf,
-    /// Frame rate of the video the keypoints come from
+    /// Frame rate of the video the keypoints come from [default: the run.json beside the keypoints]
     #[arg(long, value_name = "N")]
-    fps: f64,
+    fps: Option<f64>,
     /// Folder for angles.csv, events.csv, cycles.csv, spatiotemporal.csv
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Pipeline config whose [postprocess] and [kinematics] tables apply [default: configs/default.toml]
+    /// Pipeline config whose [postprocess] and [kinematics] tables apply [default: the run.json
+    /// beside the keypoints, else configs/default.toml]
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Override a config value, e.g. --set kinematics.prosthetic_side=\"right\" (repeatable)
@@ -32,13 +34,16 @@ pub struct Args {
 }
 
 pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
-    if !(args.fps.is_finite() && args.fps > 0.0) {
-        return Err(CliError::new(format!(
-            "--fps {} must be a positive frame rate",
-            args.fps
-        )));
+    let beside = gait_pipeline::RunBeside::find(&args.keypoints)?;
+    let fps = super::frame_rate(args.fps, beside.as_ref(), &args.keypoints)?;
+    let config_path = args
+        .config
+        .clone()
+        .or_else(|| beside.as_ref().map(|b| b.manifest.clone()));
+    let mut config = PipelineConfig::load(config_path.as_deref(), &args.sets)?;
+    if config.kinematics.frame_size.is_none() {
+        config.kinematics.frame_size = beside.as_ref().and_then(|b| b.frame_size);
     }
-    let mut config = PipelineConfig::load(args.config.as_deref(), &args.sets)?;
     if let Some(c) = &args.corrections {
         config.kinematics.corrections = Some(c.clone());
     }
@@ -51,7 +56,7 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
     let seq = gait_core::dlc::read(
         std::io::BufReader::new(file),
         args.individual.as_deref(),
-        args.fps,
+        fps,
     )
     .map_err(|e| {
         CliError::new(format!(

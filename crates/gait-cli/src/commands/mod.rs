@@ -10,7 +10,7 @@ pub mod models;
 pub mod review;
 pub mod run;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use gait_pipeline::PipelineConfig;
 
@@ -46,4 +46,33 @@ impl PipelineArgs {
     pub fn config(&self) -> Result<PipelineConfig, CliError> {
         Ok(PipelineConfig::load(self.config.as_deref(), &self.sets)?)
     }
+}
+
+/// `--fps`, else the frame rate of the run the keypoints came from; a `--fps` that contradicts
+/// the run's is taken (the user may know better) with a warning.
+pub(crate) fn frame_rate(
+    given: Option<f64>,
+    beside: Option<&gait_pipeline::RunBeside>,
+    keypoints: &Path,
+) -> Result<f64, CliError> {
+    let run = beside.and_then(|b| b.fps);
+    let fps = match (given, run) {
+        (Some(f), Some(r)) if (f - r).abs() > 1e-9 => {
+            eprintln!("warning: --fps {f} differs from the run's frame rate {r} (run.json)");
+            f
+        }
+        (Some(f), _) | (None, Some(f)) => f,
+        (None, None) => {
+            return Err(CliError::new(format!(
+                "{}: no run.json beside it to read the frame rate from; give --fps N",
+                keypoints.display()
+            )));
+        }
+    };
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(CliError::new(format!(
+            "--fps {fps} must be a positive frame rate"
+        )));
+    }
+    Ok(fps)
 }

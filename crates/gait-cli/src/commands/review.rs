@@ -11,8 +11,9 @@ pub struct Args {
     /// A `gait run` output folder
     #[arg(value_name = "RUN_DIR")]
     run_dir: Option<PathBuf>,
-    /// Review a keypoints CSV (DeepLabCut layout) instead of a run folder; needs --fps
-    #[arg(long, value_name = "FILE", requires = "fps")]
+    /// Review a keypoints CSV (DeepLabCut layout) instead of a run folder; needs --fps unless
+    /// run.json is beside it (a run's keypoints.csv)
+    #[arg(long, value_name = "FILE")]
     keypoints: Option<PathBuf>,
     /// The video the keypoints come from [default for a run: the input run.json names]
     #[arg(long, value_name = "FILE")]
@@ -20,7 +21,8 @@ pub struct Args {
     /// Frame rate of the keypoints (with --keypoints)
     #[arg(long, value_name = "N")]
     fps: Option<f64>,
-    /// Pipeline config whose [postprocess] and [kinematics] apply (with --keypoints) [default: configs/default.toml]
+    /// Pipeline config whose [postprocess] and [kinematics] apply (with --keypoints) [default: the
+    /// run.json beside the keypoints, else configs/default.toml]
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Where corrections are saved (with --keypoints) [default: corrections.toml beside the keypoints]
@@ -46,12 +48,8 @@ pub fn execute(args: Args) -> Result<(), CliError> {
             ReviewSource::from_run_dir(dir, args.video.as_deref()).map_err(fail)?
         }
         (None, Some(kp)) => {
-            let fps = args.fps.unwrap_or(0.0);
-            if !(fps.is_finite() && fps > 0.0) {
-                return Err(CliError::new(format!(
-                    "--fps {fps} must be a positive frame rate"
-                )));
-            }
+            let beside = gait_pipeline::RunBeside::find(kp)?;
+            let fps = super::frame_rate(args.fps, beside.as_ref(), kp)?;
             ReviewSource::from_keypoints(
                 kp,
                 args.video.as_deref(),
