@@ -1,0 +1,194 @@
+//! The same walk gives the same answer (issue 37): the bundled sample re-encoded as every phone
+//! and messenger does (H.264 CRF 18, visually lossless) gives the original's walking bout,
+//! events and accepted cycles; a run's keypoints.csv alone repeats the run's kinematics with
+//! `gait kin`; and a pose model without feet (the run's keypoints with the heel and toe columns
+//! emptied, as gait writes them for a COCO-17 model) still gets every event from the ankles.
+//! tools/robustness/matrix.py runs the whole matrix of variants (BENCHMARKS.md).
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::{gait, read_json, run_ok, run_on, sample_video};
+
+/// `(side, event, frame)` of a result folder's events.csv.
+fn events(dir: &Path) -> Vec<(String, String, i64)> {
+    let mut r = csv::Reader::from_path(dir.join("events.csv")).unwrap();
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            (
+                rec[0].to_string(),
+                rec[1].to_string(),
+                rec[2].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// `(side, first, last)` of the accepted cycles of cycle_quality.csv.
+fn accepted(dir: &Path) -> Vec<(String, i64, i64)> {
+    let mut r = csv::Reader::from_path(dir.join("cycle_quality.csv")).unwrap();
+    r.records()
+        .map(|rec| rec.unwrap())
+        .filter(|rec| &rec[3] == "true")
+        .map(|rec| {
+            (
+                rec[0].to_string(),
+                rec[1].parse().unwrap(),
+                rec[2].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// How many of `a`'s events have an event of the same side and kind in `b` within one frame,
+/// and how many of `b`'s have none in `a`.
+fn agreement(a: &[(String, String, i64)], b: &[(String, String, i64)]) -> (usize, usize) {
+    let near = |e: &(String, String, i64), set: &[(String, String, i64)]| {
+        set.iter()
+            .any(|f| f.0 == e.0 && f.1 == e.1 && (f.2 - e.2).abs() <= 1)
+    };
+    (
+        a.iter().filter(|e| near(e, b)).count(),
+        b.iter().filter(|e| !near(e, a)).count(),
+    )
+}
+
+fn same_cycles(a: &[(String, i64, i64)], b: &[(String, i64, i64)]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x.0 == y.0 && (x.1 - y.1).abs() <= 1 && (x.2 - y.2).abs() <= 1)
+}
+
+fn reencode(src: &Path, dst: &Path) {
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(src)
+        .args([
+            "-an", "-c:v", "libx264", "-crf", "18", "-preset", "veryfast", "-pix_fmt", "yuv420p",
+        ])
+        .arg(dst)
+        .status()
+        .expect("ffmpeg");
+    assert!(status.success());
+}
+
+#[test]
+fn a_reencoded_video_a_run_s_keypoints_and_a_model_without_feet_give_the_same_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = dir.path().join("original");
+    run_ok(&mut run_on(&sample_video(), &original));
+    let ev = events(&original);
+    let cycles = accepted(&original);
+    assert_eq!(ev.len(), 13, "{ev:?}");
+    assert_eq!(cycles.len(), 4, "{cycles:?}");
+
+    // H.264 at CRF 18: before issue 37 the bout shrank to 81-158, a false right heel strike
+    // came at 81 and only 1 + 1 cycles were accepted.
+    let video = dir.path().join("crf18.mp4");
+    reencode(&sample_video(), &video);
+    let copy = dir.path().join("crf18");
+    run_ok(&mut run_on(&video, &copy));
+    let (matched, extra) = agreement(&ev, &events(&copy));
+    assert_eq!((matched, extra), (13, 0), "{:?}", events(&copy));
+    assert!(
+        same_cycles(&cycles, &accepted(&copy)),
+        "{:?}",
+        accepted(&copy)
+    );
+
+    // `gait kin` on the run's keypoints.csv, no --fps: run.json beside it gives the frame
+    // rate, the frame size (the bout rules) and the settings.
+    let kin = dir.path().join("kin");
+    run_ok(
+        gait()
+            .args(["kin", "--keypoints"])
+            .arg(original.join("keypoints.csv"))
+            .arg("--out")
+            .arg(&kin),
+    );
+    assert_eq!(events(&kin), ev);
+    assert_eq!(accepted(&kin), cycles);
+    for file in ["bouts.csv", "cycle_quality.csv"] {
+        assert_eq!(
+            std::fs::read_to_string(kin.join(file)).unwrap(),
+            std::fs::read_to_string(original.join(file)).unwrap(),
+            "{file}"
+        );
+    }
+    // Without run.json the frame rate must be given, and the message says so.
+    let alone = dir.path().join("alone.csv");
+    std::fs::copy(original.join("keypoints.csv"), &alone).unwrap();
+    let out = gait()
+        .args(["kin", "--keypoints"])
+        .arg(&alone)
+        .arg("--out")
+        .arg(&kin)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--fps"));
+
+    // A model without feet: the heel and toe columns empty (as gait writes a COCO-17 model's).
+    let nofeet = dir.path().join("nofeet");
+    std::fs::create_dir_all(&nofeet).unwrap();
+    std::fs::copy(original.join("run.json"), nofeet.join("run.json")).unwrap();
+    without_feet(
+        &original.join("keypoints.csv"),
+        &nofeet.join("keypoints.csv"),
+    );
+    let kin = nofeet.join("kin");
+    let out = run_ok(
+        gait()
+            .args(["kin", "--keypoints"])
+            .arg(nofeet.join("keypoints.csv"))
+            .arg("--out")
+            .arg(&kin),
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("from left_ankle/left_ankle"));
+    let (matched, extra) = agreement(&ev, &events(&kin));
+    assert!(
+        matched >= 11 && extra == 0,
+        "{matched} of 13, {extra} extra: {:?}",
+        events(&kin)
+    );
+    assert!(
+        same_cycles(&cycles, &accepted(&kin)),
+        "{:?}",
+        accepted(&kin)
+    );
+    let manifest = read_json(&original.join("run.json"));
+    assert_eq!(
+        manifest["extra"]["kinematics"]["event_keypoints"]["left"], "left_heel/left_toe",
+        "{}",
+        manifest["extra"]["kinematics"]
+    );
+}
+
+/// A DeepLabCut CSV with every heel and toe cell emptied (the columns stay).
+fn without_feet(src: &Path, dst: &Path) {
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.by_ref().take(3).collect();
+    let names: Vec<&str> = header[1].split(',').collect();
+    let mut out = header.join("\n") + "\n";
+    for line in lines {
+        let cells: Vec<&str> = line
+            .split(',')
+            .enumerate()
+            .map(|(c, v)| {
+                let name = names.get(c).copied().unwrap_or("");
+                if name.ends_with("_heel") || name.ends_with("_toe") {
+                    ""
+                } else {
+                    v
+                }
+            })
+            .collect();
+        out += &(cells.join(",") + "\n");
+    }
+    std::fs::write(dst, out).unwrap();
+}
