@@ -158,19 +158,25 @@ def compare(ref, var, tol_s):
 
 
 def verdict(c, max_rms=2.0, max_rel=0.02, max_si=2.0):
-    """The issue's targets for one comparison: a list of what failed (empty: all met)."""
-    fails = []
+    """The issue's targets for one comparison, in two groups of what failed (empty: all met):
+    `decisions` (events within the tolerance, none missing or extra in the bouts, the same
+    accepted cycles) and `precision` (mean curves, spatiotemporal parameters)."""
+    decisions, precision = [], []
     if c["missing_events"] or c["extra_events"]:
-        fails.append(f"events: {len(c['missing_events'])} missing, {len(c['extra_events'])} extra or moved")
+        decisions.append(f"events: {len(c['missing_events'])} missing, {len(c['extra_events'])} extra or moved")
     if not c["cycles_same"]:
-        fails.append(f"cycles: {c['cycles_var']} accepted vs {c['cycles_ref']}")
+        decisions.append(f"cycles: {c['cycles_var']} accepted vs {c['cycles_ref']}")
     bad = {k: round(v, 2) for k, v in c["curve_rms_deg"].items() if v > max_rms}
     if bad:
-        fails.append(f"curves RMS > {max_rms} deg: {bad}")
+        precision.append(f"curves RMS > {max_rms} deg: {bad}")
     badp = {k: round(v["rel"] * 100, 1) for k, v in c["params"].items() if "rel" in v and v["rel"] > max_rel}
     bads = {k: round(v["abs"], 1) for k, v in c["params"].items() if "abs" in v and v["abs"] > max_si}
     if badp:
-        fails.append(f"parameters off by > {max_rel * 100:.0f} %: {badp}")
+        precision.append(f"parameters off by > {max_rel * 100:.0f} %: {badp}")
     if bads:
-        fails.append(f"symmetry indices off by > {max_si} points: {bads}")
-    return fails
+        precision.append(f"symmetry indices off by > {max_si} points: {bads}")
+    return {"decisions": decisions, "precision": precision}
+
+
+def failed(v):
+    return v["decisions"] + v["precision"]
