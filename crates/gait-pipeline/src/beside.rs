@@ -29,7 +29,7 @@ impl RunBeside {
         }
         let bad = |why: String| {
             PipelineError::config(
-                &manifest.display().to_string(),
+                manifest.display().to_string(),
                 format!("{why}; repair or remove it, or give --fps and --config"),
             )
         };
