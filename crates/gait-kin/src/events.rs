@@ -1,12 +1,11 @@
 //! Heel strikes and toe-offs from keypoints, or from a user's CSV.
 
-use std::path::Path;
-
 use serde::{Deserialize, Serialize};
 
-use crate::KinError;
 use crate::config::Side;
 use crate::direction::Direction;
+pub use crate::events_csv::read_csv;
+use crate::margins::EventMargin;
 pub use crate::peaks::find_peaks;
 use crate::peaks::{Peak, gait_peaks};
 use crate::tracks::Tracks;
@@ -66,6 +65,12 @@ impl EventKeypoints {
 /// Finds gait events in cleaned trajectories with a known direction per frame.
 pub trait EventDetector {
     fn detect(&self, t: &Tracks, dirs: &[Direction]) -> Vec<Event>;
+
+    /// How close the detector's decisions came to its thresholds (run.json); none by default.
+    fn margins(&self, t: &Tracks, dirs: &[Direction]) -> Vec<EventMargin> {
+        let _ = (t, dirs);
+        Vec::new()
+    }
 }
 
 /// Zeni et al. (2008) coordinate method, refined by foot speed. Zeni: heel strike at the most
@@ -198,7 +203,7 @@ impl ZeniRefined {
         ground: &[f64],
         side: Side,
         leg: f64,
-    ) -> Vec<Event> {
+    ) -> (Vec<Event>, Vec<EventMargin>) {
         let n = t.len();
         let fps = t.fps;
         let Some(EventKeypoints {
@@ -207,7 +212,7 @@ impl ZeniRefined {
             ..
         }) = EventKeypoints::of(t, side)
         else {
-            return Vec::new();
+            return (Vec::new(), Vec::new());
         };
         let d = |i: usize| dirs.get(i).map_or(0.0, |d| d.sign());
         let rel = |j: usize, i: usize| match (t.at(j, i), t.pelvis(i)) {
@@ -291,8 +296,13 @@ impl ZeniRefined {
             (lo..=hi).all(|i| dirs.get(i) == dirs.get(p))
         };
         let mut out = Vec::new();
-        let (heel_peaks, _) = gait_peaks(&heel_rel, prom, self.excursion_share, min_dist);
-        for Peak { index: p, .. } in heel_peaks {
+        let heel_peaks = gait_peaks(&heel_rel, prom, self.excursion_share, min_dist);
+        let toe_peaks = gait_peaks(&toe_back, prom, self.excursion_share, min_dist);
+        let margins = vec![
+            EventMargin::of(side, EventKind::HeelStrike, &heel_peaks),
+            EventMargin::of(side, EventKind::ToeOff, &toe_peaks),
+        ];
+        for &Peak { index: p, .. } in &heel_peaks.kept {
             if stable(p) {
                 out.push(Event {
                     side,
@@ -301,8 +311,7 @@ impl ZeniRefined {
                 });
             }
         }
-        let (toe_peaks, _) = gait_peaks(&toe_back, prom, self.excursion_share, min_dist);
-        for Peak { index: p, .. } in toe_peaks {
+        for &Peak { index: p, .. } in &toe_peaks.kept {
             if stable(p) {
                 out.push(Event {
                     side,
@@ -311,24 +320,38 @@ impl ZeniRefined {
                 });
             }
         }
-        out
+        (out, margins)
+    }
+
+    /// Each side's events and margins, `None` without a usable leg length or frame rate.
+    fn both_sides(&self, t: &Tracks, dirs: &[Direction]) -> Option<(Vec<Event>, Vec<EventMargin>)> {
+        let leg = t.leg_length();
+        if !leg.is_finite() || t.fps <= 0.0 {
+            return None;
+        }
+        let ground = ground_speed(t, dirs);
+        let (mut ev, mut margins) = (Vec::new(), Vec::new());
+        for s in Side::BOTH {
+            let (e, m) = self.side_events(t, dirs, &ground, s, leg);
+            ev.extend(e);
+            margins.extend(m);
+        }
+        Some((ev, margins))
     }
 }
 
 impl EventDetector for ZeniRefined {
     fn detect(&self, t: &Tracks, dirs: &[Direction]) -> Vec<Event> {
-        let leg = t.leg_length();
-        if !leg.is_finite() || t.fps <= 0.0 {
+        let Some((mut ev, _)) = self.both_sides(t, dirs) else {
             return Vec::new();
-        }
-        let ground = ground_speed(t, dirs);
-        let mut ev: Vec<Event> = Side::BOTH
-            .iter()
-            .flat_map(|&s| self.side_events(t, dirs, &ground, s, leg))
-            .collect();
+        };
         sort(&mut ev);
         drop_implausible_toe_offs(&mut ev, self.min_stance_share);
         ev
+    }
+
+    fn margins(&self, t: &Tracks, dirs: &[Direction]) -> Vec<EventMargin> {
+        self.both_sides(t, dirs).map(|x| x.1).unwrap_or_default()
     }
 }
 
@@ -367,55 +390,6 @@ pub fn drop_implausible_toe_offs(ev: &mut Vec<Event>, min_share: f64) {
 /// Sorts events by frame, then side, then kind.
 pub fn sort(ev: &mut [Event]) {
     ev.sort_by_key(|e| (e.frame, e.side == Side::Right, e.event));
-}
-
-/// Reads `side,event,frame[,time_s]` (header required; extra columns ignored).
-pub fn read_csv(path: &Path) -> Result<Vec<Event>, KinError> {
-    let bad = |why: String| KinError::EventsCsv {
-        path: path.to_path_buf(),
-        reason: why,
-    };
-    let mut r = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| bad(e.to_string()))?;
-    let headers = r.headers().map_err(|e| bad(e.to_string()))?.clone();
-    let col = |name: &str| {
-        headers
-            .iter()
-            .position(|h| h == name)
-            .ok_or_else(|| bad(format!("no `{name}` column (need side,event,frame)")))
-    };
-    let (cs, ce, cf) = (col("side")?, col("event")?, col("frame")?);
-    let mut out = Vec::new();
-    for (row, rec) in r.records().enumerate() {
-        let rec = rec.map_err(|e| bad(e.to_string()))?;
-        let line = row + 2;
-        let get = |c: usize| rec.get(c).unwrap_or("");
-        let side = match get(cs) {
-            "left" => Side::Left,
-            "right" => Side::Right,
-            s => return Err(bad(format!("line {line}: side `{s}` is not left or right"))),
-        };
-        let event = match get(ce) {
-            "heel_strike" => EventKind::HeelStrike,
-            "toe_off" => EventKind::ToeOff,
-            s => {
-                return Err(bad(format!(
-                    "line {line}: event `{s}` is not heel_strike or toe_off"
-                )));
-            }
-        };
-        let frame = get(cf).parse::<usize>().map_err(|_| {
-            bad(format!(
-                "line {line}: frame `{}` is not a frame number",
-                get(cf)
-            ))
-        })?;
-        out.push(Event { side, event, frame });
-    }
-    sort(&mut out);
-    Ok(out)
 }
 
 #[cfg(test)]
@@ -498,30 +472,5 @@ mod tests {
         let mut e = vec![ev(l, hs, 10), ev(l, to, 11)];
         drop_implausible_toe_offs(&mut e, 0.3);
         assert_eq!(e.len(), 2);
-    }
-
-    #[test]
-    fn reads_and_rejects_event_files() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("e.csv");
-        std::fs::write(
-            &p,
-            "side,event,frame,time_s\nright,toe_off,20,0.6\nleft,heel_strike,3,0.1\n",
-        )
-        .unwrap();
-        let ev = read_csv(&p).unwrap();
-        assert_eq!(
-            ev[0],
-            Event {
-                side: Side::Left,
-                event: EventKind::HeelStrike,
-                frame: 3
-            }
-        );
-        std::fs::write(&p, "side,event,frame\nleft,foot_flat,3\n").unwrap();
-        let e = read_csv(&p).unwrap_err().to_string();
-        assert!(e.contains("foot_flat") && e.contains("line 2"), "{e}");
-        std::fs::write(&p, "side,kind\n").unwrap();
-        assert!(read_csv(&p).unwrap_err().to_string().contains("`event`"));
     }
 }

@@ -29,8 +29,11 @@ pub mod corrections;
 pub mod cycles;
 pub mod direction;
 pub mod events;
+mod events_csv;
+mod feet;
 mod input_check;
 pub mod likelihood;
+pub mod margins;
 pub mod one_euro;
 mod output;
 pub mod peaks;
@@ -129,6 +132,8 @@ pub struct KinResult {
     pub events: Vec<Event>,
     /// True when the events came from `kinematics.events_csv`.
     pub events_from_file: bool,
+    /// How close the event and cycle decisions came to their thresholds.
+    pub margins: margins::Margins,
     /// Per side, the keypoints the events were detected on (`heel strike/toe-off`): the heel
     /// and the toe, or the ankle for a model without feet.
     pub event_keypoints: std::collections::BTreeMap<String, String>,
@@ -240,7 +245,7 @@ fn run_chain(
     let (t, n) = (&c.clean, c.clean.len());
     let dirs = directions(t, &mut warnings);
     let angles = angles::compute(t, &dirs.per_frame);
-    warn_missing_toes(t, &mut warnings);
+    feet::warn_missing_toes(t, &mut warnings);
 
     let frames = bouts::Frames {
         clean: t,
@@ -259,10 +264,15 @@ fn run_chain(
             "no walking bout found: the events of events_csv are used as given".into()
         });
     }
-    let event_keypoints = event_keypoints(t, kin, &mut warnings);
+    let event_keypoints = feet::event_keypoints(t, kin, &mut warnings);
     let (mut events, from_file) = match &kin.events_csv {
         Some(p) => (events::read_csv(p)?, true),
         None => (steps.events.detect(t, &dirs.per_frame), false),
+    };
+    let event_margins = if from_file {
+        Vec::new()
+    } else {
+        steps.events.margins(t, &dirs.per_frame)
     };
     if enforce_bouts {
         events.retain(|e| bouts::bout_of(&bouts, e.frame).is_some());
@@ -323,6 +333,10 @@ fn run_chain(
         events,
         events_from_file: from_file,
         event_keypoints,
+        margins: margins::Margins {
+            events: event_margins,
+            cycles: margins::cycles(&cycle_quality, kin),
+        },
         strides,
         cycle_quality,
         cycles_accepted,
@@ -475,51 +489,6 @@ fn directions(t: &Tracks, warnings: &mut Vec<String>) -> direction::Directions {
             .push("walking direction unknown in every frame: no angles, events or cycles".into());
     }
     dirs
-}
-
-/// The keypoints each side's events come from, with a warning where a model without feet leaves
-/// only the ankle (none when the events come from a file).
-fn event_keypoints(
-    t: &Tracks,
-    kin: &KinematicsConfig,
-    warnings: &mut Vec<String>,
-) -> std::collections::BTreeMap<String, String> {
-    let mut out = std::collections::BTreeMap::new();
-    if kin.events_csv.is_some() || t.is_empty() {
-        return out;
-    }
-    for side in Side::BOTH {
-        let Some(k) = events::EventKeypoints::of(t, side) else {
-            continue;
-        };
-        let used = k.describe(t);
-        if t.names[k.heel_strike].ends_with("_ankle") || t.names[k.toe_off].ends_with("_ankle") {
-            warnings.push(format!(
-                "no {0} heel or toe keypoint in any frame: {0} events from {used} (Zeni's method on the ankle)",
-                side.name()
-            ));
-        }
-        out.insert(side.name().to_string(), used);
-    }
-    out
-}
-
-/// Without a toe there is no foot segment: say so instead of leaving the reader to wonder why
-/// the ankle column is empty (OpenPose COCO-18 has no feet).
-fn warn_missing_toes(t: &Tracks, warnings: &mut Vec<String>) {
-    for side in ["left", "right"] {
-        let toe = format!("{side}_toe");
-        let seen = t
-            .names
-            .iter()
-            .position(|name| *name == toe)
-            .is_some_and(|j| t.x[j].iter().any(|v| v.is_finite()));
-        if !t.is_empty() && !seen {
-            warnings.push(format!(
-                "no {toe} keypoint in any frame (the pose model may have no feet, e.g. OpenPose COCO-18): the {side} ankle angle is unavailable"
-            ));
-        }
-    }
 }
 
 #[cfg(test)]

@@ -95,7 +95,7 @@ pub fn with_prominence(x: &[f64], prominence: f64, min_dist: usize) -> Vec<Peak>
 /// bundled sample re-encoded at H.264 CRF 18 had a stance wobble of 23 px against a threshold
 /// of 20 px, where the original's was 12 px, and its strides stood out by 190 px). Each peak
 /// keeps its prominence over the threshold, the margin of its decision.
-pub fn gait_peaks(x: &[f64], floor: f64, share: f64, min_dist: usize) -> (Vec<Peak>, f64) {
+pub fn gait_peaks(x: &[f64], floor: f64, share: f64, min_dist: usize) -> GaitPeaks {
     let candidates = with_prominence(x, floor, min_dist);
     let mut proms: Vec<f64> = candidates.iter().map(|p| p.prominence).collect();
     let typical = crate::tracks::median(&mut proms);
@@ -104,11 +104,24 @@ pub fn gait_peaks(x: &[f64], floor: f64, share: f64, min_dist: usize) -> (Vec<Pe
     } else {
         floor
     };
-    let kept = candidates
+    let (kept, dropped): (Vec<Peak>, Vec<Peak>) = candidates
         .into_iter()
-        .filter(|p| p.prominence >= threshold)
-        .collect();
-    (kept, threshold)
+        .partition(|p| p.prominence >= threshold);
+    GaitPeaks {
+        kept,
+        threshold,
+        strongest_dropped: dropped.iter().map(|p| p.prominence).reduce(f64::max),
+    }
+}
+
+/// The strides among a trajectory's peaks, with what the decision rested on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GaitPeaks {
+    pub kept: Vec<Peak>,
+    /// The prominence a peak needed.
+    pub threshold: f64,
+    /// The largest prominence of a candidate that fell short (above the floor).
+    pub strongest_dropped: Option<f64>,
 }
 
 #[cfg(test)]
@@ -134,12 +147,13 @@ mod tests {
             x.extend([0.0, 5.0, 10.0, 5.0, 0.0, -2.3, 0.0, -2.3, -4.0, -2.0]);
         }
         let all = find_peaks(&x, 2.0, 1);
-        let (kept, threshold) = gait_peaks(&x, 2.0, 0.5, 1);
+        let g = gait_peaks(&x, 2.0, 0.5, 1);
         assert_eq!(
-            kept.iter().map(|p| p.index).collect::<Vec<_>>(),
+            g.kept.iter().map(|p| p.index).collect::<Vec<_>>(),
             vec![2, 12, 22]
         );
-        assert!(all.len() > kept.len(), "{all:?}");
-        assert!(threshold > 2.3 && threshold < 10.0, "{threshold}");
+        assert!(all.len() > g.kept.len(), "{all:?}");
+        assert!(g.threshold > 2.3 && g.threshold < 10.0, "{}", g.threshold);
+        assert!(g.strongest_dropped.is_some_and(|d| (d - 2.3).abs() < 1e-9));
     }
 }
