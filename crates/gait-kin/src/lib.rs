@@ -31,6 +31,7 @@ pub mod direction;
 pub mod events;
 mod events_csv;
 mod feet;
+pub mod glitch;
 mod input_check;
 pub mod likelihood;
 pub mod margins;
@@ -385,6 +386,34 @@ fn clean(
         warnings.push(format!(
             "no keypoint with likelihood >= {} in any frame",
             post.likelihood_threshold
+        ));
+    }
+
+    // Frames where the pose left the subject's path for a moment (someone else drawn while
+    // the subject passes them) are not the subject: dropped whole, bridged by the gap filler.
+    let glitches = glitch::GlitchRule::default().find(&t);
+    let glitch_frames = glitches.iter().filter(|&&g| g).count();
+    if glitch_frames > 0 {
+        for i in (0..n).filter(|&i| glitches[i]) {
+            for j in 0..t.names.len() {
+                t.x[j][i] = f64::NAN;
+                t.y[j][i] = f64::NAN;
+            }
+        }
+        let at: Vec<String> =
+            gait_core::ranges((0..n).filter(|&i| glitches[i]).map(|i| t.first_frame + i))
+                .iter()
+                .map(|[a, b]| {
+                    if a == b {
+                        a.to_string()
+                    } else {
+                        format!("{a}-{b}")
+                    }
+                })
+                .collect();
+        warnings.push(format!(
+            "pose dropped in {glitch_frames} frames ({}) where it left the subject's path for a moment (someone else drawn)",
+            at.join(", ")
         ));
     }
 
