@@ -92,6 +92,36 @@ impl GlitchRule {
     }
 }
 
+/// Drops every keypoint of the frames [`GlitchRule::default`] finds, with a warning naming them.
+pub(crate) fn drop_glitches(t: &mut Tracks, warnings: &mut Vec<String>) {
+    let glitches = GlitchRule::default().find(t);
+    let frames: Vec<usize> = (0..t.len()).filter(|&i| glitches[i]).collect();
+    if frames.is_empty() {
+        return;
+    }
+    for &i in &frames {
+        for j in 0..t.names.len() {
+            t.x[j][i] = f64::NAN;
+            t.y[j][i] = f64::NAN;
+        }
+    }
+    let at: Vec<String> = gait_core::ranges(frames.iter().map(|i| t.first_frame + i))
+        .iter()
+        .map(|[a, b]| {
+            if a == b {
+                a.to_string()
+            } else {
+                format!("{a}-{b}")
+            }
+        })
+        .collect();
+    warnings.push(format!(
+        "pose dropped in {} frames ({}) where it left the subject's path for a moment (someone else drawn)",
+        frames.len(),
+        at.join(", ")
+    ));
+}
+
 /// Where the path predicts the pelvis at frame `j` (constant velocity over the last `base`
 /// frames of the path), and the last frame of the path; `None` on an empty path.
 fn predict(path: &[(usize, (f64, f64))], j: usize, base: usize) -> Option<((f64, f64), usize)> {

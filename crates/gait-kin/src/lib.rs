@@ -391,31 +391,7 @@ fn clean(
 
     // Frames where the pose left the subject's path for a moment (someone else drawn while
     // the subject passes them) are not the subject: dropped whole, bridged by the gap filler.
-    let glitches = glitch::GlitchRule::default().find(&t);
-    let glitch_frames = glitches.iter().filter(|&&g| g).count();
-    if glitch_frames > 0 {
-        for i in (0..n).filter(|&i| glitches[i]) {
-            for j in 0..t.names.len() {
-                t.x[j][i] = f64::NAN;
-                t.y[j][i] = f64::NAN;
-            }
-        }
-        let at: Vec<String> =
-            gait_core::ranges((0..n).filter(|&i| glitches[i]).map(|i| t.first_frame + i))
-                .iter()
-                .map(|[a, b]| {
-                    if a == b {
-                        a.to_string()
-                    } else {
-                        format!("{a}-{b}")
-                    }
-                })
-                .collect();
-        warnings.push(format!(
-            "pose dropped in {glitch_frames} frames ({}) where it left the subject's path for a moment (someone else drawn)",
-            at.join(", ")
-        ));
-    }
+    glitch::drop_glitches(&mut t, warnings);
 
     // Frames with both legs drawn on one carry no labels and mislead the swap correction; they
     // are part of the label cleaning and go with it.
