@@ -299,6 +299,7 @@ fn run_chain(
         enforce_bouts,
         excluded: &fixes.exclude,
     };
+    quality::warn_small_subject(t, kin, &mut warnings);
     let cycle_quality = quality::assess(&evidence, &strides, kin);
     warnings.extend(quality::warnings(&cycle_quality, kin));
     let (cycles_accepted, cycles_rejected) = quality::counts(&cycle_quality);

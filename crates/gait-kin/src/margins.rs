@@ -74,6 +74,7 @@ pub fn cycles(q: &[CycleQuality], kin: &KinematicsConfig) -> Vec<CycleMargin> {
                     "swap",
                     c.swapped_frames as f64 / (kin.cycle_max_swapped_share * frames),
                 ),
+                ("small_subject", kin.cycle_min_leg_px / c.leg_px),
             ];
             checks
                 .into_iter()
@@ -118,6 +119,7 @@ mod tests {
             mean_likelihood: 0.99,
             thigh_ratio: 1.02,
             shank_ratio: 0.97,
+            leg_px: 190.0,
             swapped_frames: 0,
             bout: Some(0),
         };

@@ -112,6 +112,7 @@ fn cycle_quality(r: &KinResult) -> Table {
         .with("mean_likelihood", nums(q.iter().map(|q| q.mean_likelihood)))
         .with("thigh_ratio", nums(q.iter().map(|q| q.thigh_ratio)))
         .with("shank_ratio", nums(q.iter().map(|q| q.shank_ratio)))
+        .with("leg_px", nums(q.iter().map(|q| q.leg_px)))
         .with("swapped_frames", ints(q.iter().map(|q| q.swapped_frames)))
         .with(
             "bout",

@@ -34,9 +34,11 @@ pub enum Reason {
     CrossesBout,
     /// Overlaps frames excluded in the corrections (`[[exclude]]`).
     Excluded,
+    /// The leg shorter than `cycle_min_leg_px`: the walker too small in the image.
+    SmallSubject,
 }
 
-pub const REASONS: [Reason; 7] = [
+pub const REASONS: [Reason; 8] = [
     Reason::StrideTime,
     Reason::FilledGap,
     Reason::LowLikelihood,
@@ -44,6 +46,7 @@ pub const REASONS: [Reason; 7] = [
     Reason::Swap,
     Reason::CrossesBout,
     Reason::Excluded,
+    Reason::SmallSubject,
 ];
 
 impl Reason {
@@ -56,6 +59,7 @@ impl Reason {
             Reason::Swap => "swap",
             Reason::CrossesBout => "crosses_bout",
             Reason::Excluded => "excluded",
+            Reason::SmallSubject => "small_subject",
         }
     }
 
@@ -80,6 +84,10 @@ impl Reason {
             Reason::Swap => "leg labels exchanged by the swap correction".into(),
             Reason::CrossesBout => "not inside one walking bout".into(),
             Reason::Excluded => "over frames excluded in the corrections".into(),
+            Reason::SmallSubject => format!(
+                "legs shorter than {} px (hip to ankle): the walker is too small in the image; film closer or at a higher resolution",
+                kin.cycle_min_leg_px
+            ),
         }
     }
 }
@@ -105,6 +113,8 @@ pub struct CycleQuality {
     /// Median thigh length over the stride / median over the bout (both legs).
     pub thigh_ratio: f64,
     pub shank_ratio: f64,
+    /// Median thigh + median shank length of the stride's leg, pixels.
+    pub leg_px: f64,
     /// Frames inside the stride whose leg labels the swap correction exchanged.
     pub swapped_frames: usize,
     /// Index into the bouts of the bout holding the whole stride.
@@ -274,6 +284,7 @@ fn measure(ev: &Evidence, s: &Stride, reference: [f64; 2], median_s: f64) -> Cyc
         mean_likelihood: lik.iter().sum::<f64>() / lik.len() as f64,
         thigh_ratio: own[0] / reference[0],
         shank_ratio: own[1] / reference[1],
+        leg_px: own[0] + own[1],
         swapped_frames: ev.swapped[a..=b].iter().filter(|&&x| x).count(),
         bout: None,
     }
@@ -310,6 +321,7 @@ fn verdict(q: &CycleQuality, kin: &KinematicsConfig, enforce_bouts: bool) -> Vec
                 > kin.cycle_max_swapped_share * (q.last_frame - q.first_frame + 1) as f64 + eps,
         ),
         (Reason::CrossesBout, enforce_bouts && q.bout.is_none()),
+        (Reason::SmallSubject, q.leg_px < kin.cycle_min_leg_px),
     ]
     .into_iter()
     .filter_map(|(r, bad)| bad.then_some(r))
@@ -377,6 +389,24 @@ pub fn step_ok(
         .filter(|c| c.first_frame <= from && to <= c.last_frame)
         .peekable();
     around.peek().is_none() || around.any(|c| c.accepted)
+}
+
+/// A walker too small in the image for the pose model: the measured leg and the frames.
+pub(crate) fn warn_small_subject(t: &Tracks, kin: &KinematicsConfig, warnings: &mut Vec<String>) {
+    let leg = t.leg_length();
+    if !(leg.is_finite() && leg < kin.cycle_min_leg_px) {
+        return;
+    }
+    let seen: Vec<usize> = (0..t.len()).filter(|&i| t.pelvis(i).is_some()).collect();
+    let (Some(a), Some(b)) = (seen.first(), seen.last()) else {
+        return;
+    };
+    warnings.push(format!(
+        "the subject's legs are {leg:.0} px long in the image (thigh + shank, median over frames {}-{}), under kinematics.cycle_min_leg_px = {}: too small for reliable keypoints, so strides are rejected (small_subject); film closer or at a higher resolution",
+        t.first_frame + a,
+        t.first_frame + b,
+        kin.cycle_min_leg_px
+    ));
 }
 
 #[cfg(test)]

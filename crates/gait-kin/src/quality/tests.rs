@@ -236,3 +236,39 @@ fn strides_over_excluded_frames_are_rejected() {
         q[0]
     );
 }
+
+/// The synthetic walker's legs are about 300 px: under a 400 px minimum every stride is
+/// rejected as too small, the warning names the measured length and the frames, and 0 turns
+/// the check off.
+#[test]
+fn a_walker_too_small_in_the_image_is_rejected_and_named() {
+    let c = Case::new();
+    let small = KinematicsConfig {
+        cycle_min_leg_px: 400.0,
+        ..KinematicsConfig::default()
+    };
+    let q = c.judge(&strides(), &small);
+    assert!(
+        q.iter().all(|q| q.reasons == vec![Reason::SmallSubject]),
+        "{q:?}"
+    );
+    assert!(
+        q.iter().all(|q| (250.0..350.0).contains(&q.leg_px)),
+        "{q:?}"
+    );
+    let mut warnings = Vec::new();
+    warn_small_subject(&c.t, &small, &mut warnings);
+    assert_eq!(warnings.len(), 1);
+    assert!(
+        warnings[0].contains("px long") && warnings[0].contains("frames 0-179"),
+        "{warnings:?}"
+    );
+    let off = KinematicsConfig {
+        cycle_min_leg_px: 0.0,
+        ..KinematicsConfig::default()
+    };
+    assert!(c.judge(&strides(), &off).iter().all(|q| q.accepted));
+    warnings.clear();
+    warn_small_subject(&c.t, &KinematicsConfig::default(), &mut warnings);
+    assert!(warnings.is_empty());
+}
