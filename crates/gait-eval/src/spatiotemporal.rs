@@ -109,6 +109,7 @@ pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side
         "Both".into(),
         "Normative mean ± SD".into(),
         sym.into(),
+        "Smallest real change (MDC95)".into(),
     ];
     let leg = rows
         .iter()
@@ -145,6 +146,7 @@ pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side
             },
         };
         let cell = |p: Option<&StParam>| p.map_or("—".to_string(), mean_sd);
+        let mdc = crate::reliability::cell(param, &unit);
         out.push(vec![
             label(param),
             unit,
@@ -153,6 +155,7 @@ pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side
             cell(b),
             norm_cell,
             sym_row.map_or("—".into(), |s| format!("{:.1}", s.mean)),
+            mdc,
         ]);
     }
     Table {
