@@ -3,6 +3,8 @@
 The stage modules are in python/tests/stages/ (on sys.path here, on PYTHONPATH for the command).
 """
 
+import csv
+import json
 import pathlib
 import shutil
 import subprocess
@@ -281,3 +283,41 @@ def test_mediapipe_stage_equals_the_built_in_blazepose(gait, video, tmp_path):
     assert len(ea) >= 10 and len(ea) == len(eb), (ea, eb)
     for side, kind, frame in ea:
         assert any(s == side and k == kind and abs(f - frame) <= 1 for s, k, f in eb), (side, kind, frame, eb)
+
+
+def test_a_top_down_coco17_stage_follows_the_subject(video, tmp_path):
+    """Issue 37: a Python pose stage that takes the subject's boxes (examples/python/mediapipe_coco17.py,
+    mediapipe on each box, written as COCO-17: no heels, no toes) follows the walker the subject pass
+    chose (listed by the built-in BlazePose detector), and its events, from the ankles, agree with the
+    built-in BlazePose run's: at least 11 of its 13 within a frame, and the same accepted cycles."""
+    fast = ["--no-progress", "--set", "report.overlay=false", "--set", "report.pdf=false"]
+    cli("run", "--input", video, "--out", tmp_path / "built-in", *fast)
+    cli(
+        "run", "--input", video, "--out", tmp_path / "coco17", *fast,
+        "--set", "pose.kind=python", "--set", "pose.module=mediapipe_coco17",
+        "--set", "pose.class=MediapipeCoco17",
+    )
+    manifest = json.loads((tmp_path / "coco17" / "run.json").read_text())
+    assert manifest["stages"]["subject"]["kind"].startswith("blazepose detector"), manifest["stages"]
+    assert manifest["subject"]["reason"].startswith("walker"), manifest["subject"]
+    assert manifest["extra"]["kinematics"]["event_keypoints"]["left"] == "left_ankle/left_ankle"
+
+    def events(folder):
+        with open(folder / "events.csv", newline="") as f:
+            return [(r["side"], r["event"], int(r["frame"])) for r in csv.DictReader(f)]
+
+    def cycles(folder):
+        with open(folder / "cycle_quality.csv", newline="") as f:
+            return [
+                (r["side"], int(r["first_frame"]), int(r["last_frame"]))
+                for r in csv.DictReader(f)
+                if r["accepted"] == "true"
+            ]
+
+    a, b = events(tmp_path / "built-in"), events(tmp_path / "coco17")
+    assert len(a) == 13, a
+    near = [e for e in a if any(s == e[0] and k == e[1] and abs(f - e[2]) <= 1 for s, k, f in b)]
+    assert len(near) >= 11, (a, b)
+    ca, cb = cycles(tmp_path / "built-in"), cycles(tmp_path / "coco17")
+    assert len(ca) == len(cb) == 4, (ca, cb)
+    assert all(x[0] == y[0] and abs(x[1] - y[1]) <= 1 and abs(x[2] - y[2]) <= 1 for x, y in zip(ca, cb)), (ca, cb)

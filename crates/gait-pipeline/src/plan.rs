@@ -83,11 +83,11 @@ pub(crate) fn cache_root(config: &PipelineConfig, out: &Path) -> Option<std::pat
 /// The cache of the subject pass: the people in each frame depend on the
 /// input and the pose model's detector, not on whom the run follows.
 pub(crate) fn subject_cache(
-    config: &PipelineConfig,
+    finder: &gait_pose::PoseConfig,
     models: &Models,
     root: Option<&Path>,
 ) -> Result<(StageCache, String), PipelineError> {
-    let mut pose = serde_json::to_value(&config.pose).unwrap_or_default();
+    let mut pose = serde_json::to_value(finder).unwrap_or_default();
     if let Some(t) = pose.as_object_mut() {
         t.remove("person");
     }

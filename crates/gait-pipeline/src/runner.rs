@@ -313,12 +313,25 @@ fn find_subject(
     root: Option<&Path>,
     bar: &dyn Fn(&str) -> Progress,
 ) -> Result<SubjectPass, PipelineError> {
-    let (cache, key) = plan::subject_cache(config, models, root)?;
-    let kind = registry::stage_kinds(config)[2].1.clone();
+    // A stage that cannot list people (Python) has them listed by the built-in detector.
+    let finder = config.pose.people_finder();
+    let pose_ctx = ctx.clone().on(models.devices[2]);
+    let mut kind = registry::stage_kinds(config)[2].1.clone();
+    if let Some(f) = &finder {
+        if let Err(e) = f.build(&pose_ctx) {
+            let why = format!(
+                "the {kind} pose stage cannot list the people in a frame and the built-in BlazePose detector that lists them for it is not there ({}): no subject tracking, the estimator picks a person frame by frame; run `gait models fetch blazepose`",
+                crate::one_line(&e.to_string())
+            );
+            return Ok((None, None, vec![why]));
+        }
+        kind = format!("blazepose detector (people for the {kind} pose stage)");
+    }
+    let people_from = finder.as_ref().unwrap_or(&config.pose);
+    let (cache, key) = plan::subject_cache(people_from, models, root)?;
     let mut record = plan::record(kind, models.devices[2], &key);
     let bar = bar("finding the subject");
-    let pose_ctx = ctx.clone().on(models.devices[2]);
-    let build = || config.pose.build(&pose_ctx).map_err(PipelineError::from);
+    let build = || people_from.build(&pose_ctx).map_err(PipelineError::from);
     // One model per core on the CPU; a GPU runs one at a time anyway.
     let workers = match models.devices[2] {
         gait_core::Device::Cpu => {

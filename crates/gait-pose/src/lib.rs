@@ -45,6 +45,19 @@ impl PoseConfig {
         }
     }
 
+    /// The estimator the subject pass lists the people of each frame with, when it is not this
+    /// one: a Python stage cannot list people, so for one that takes the subject's boxes
+    /// (`estimate(self, frames, boxes)`, a top-down model) the built-in BlazePose detector (the
+    /// default run's) finds them. A Python stage without boxes picks its person itself, as before.
+    pub fn people_finder(&self) -> Option<PoseConfig> {
+        match self {
+            PoseConfig::Python(p) if gait_python::class_takes_boxes(p) => {
+                Some(PoseConfig::Blazepose(Default::default()))
+            }
+            _ => None,
+        }
+    }
+
     /// Model files the estimator reads (checksummed into `run.json`).
     pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
         match self {

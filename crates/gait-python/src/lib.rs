@@ -6,6 +6,7 @@
 //! interpreter) and inside the `gait` Python package (where the interpreter
 //! is the user's). The stage protocol is in docs/adding-a-stage.md.
 
+mod boxes;
 mod config;
 mod error;
 mod frames;
@@ -13,6 +14,7 @@ mod interpreter;
 mod output;
 mod stages;
 
+pub use boxes::class_takes_boxes;
 pub use config::PythonStageConfig;
 pub use error::PythonStageError;
 pub use stages::{load_edge_detector, load_pose_estimator, load_regenerator};

@@ -3,12 +3,13 @@
 
 use gait_core::pose_layout::PoseLayout;
 use gait_core::{
-    EdgeDetector, EdgeMap, Frame, ImageRegenerator, Keypoint, Pose, PoseEstimator, Resize,
-    StageContext, StageError,
+    EdgeDetector, EdgeMap, Frame, ImageRegenerator, Keypoint, PersonBox, Pose, PoseEstimator,
+    Resize, StageContext, StageError,
 };
 use image::{GrayImage, RgbImage};
 use pyo3::prelude::*;
 
+use crate::boxes;
 use crate::frames::Views;
 use crate::interpreter::{self, describe};
 use crate::{PythonStageConfig, PythonStageError, output};
@@ -19,6 +20,7 @@ pub fn load_pose_estimator(
     _ctx: &StageContext,
 ) -> Result<Box<dyn PoseEstimator>, StageError> {
     let stage = Stage::load(cfg, Family::POSE)?;
+    let takes_boxes = Python::attach(|py| boxes::wanted(py, stage.object.bind(py)));
     let layout = Python::attach(|py| {
         let found: String = stage
             .object
@@ -36,6 +38,7 @@ pub fn load_pose_estimator(
         names: layout.names(),
         layout,
         stage,
+        takes_boxes,
     }))
 }
 
@@ -73,7 +76,7 @@ impl Family {
         name: "pose",
         method: "estimate",
         takes_edges: false,
-        signature: "`keypoints = \"blazepose33\"` (or \"coco17\", \"coco18\") and `estimate(self, frames)`",
+        signature: "`keypoints = \"blazepose33\"` (or \"coco17\", \"coco18\") and `estimate(self, frames)` or `estimate(self, frames, boxes)`",
     };
     const EDGE: Family = Family {
         name: "edge",
@@ -87,6 +90,15 @@ impl Family {
         takes_edges: true,
         signature: "`regenerate(self, frames, edges)`",
     };
+}
+
+/// What a stage's method gets after the frames.
+enum Extra<'a> {
+    /// Nothing (a pose or edge stage), or `None` where the method takes edges.
+    Nothing,
+    Edges(&'a [EdgeMap]),
+    /// The subject's box per frame (`estimate(self, frames, boxes)`).
+    Boxes(&'a [Option<PersonBox>]),
 }
 
 /// One Python stage object and numpy, which its arrays come from.
@@ -128,7 +140,7 @@ impl Stage {
     fn call<T>(
         &self,
         frames: &[Frame],
-        edges: Option<&[EdgeMap]>,
+        extra: Extra,
         read: impl for<'py> FnOnce(
             &Bound<'py, PyModule>,
             &Bound<'py, PyAny>,
@@ -144,18 +156,20 @@ impl Stage {
                 reason: describe(py, &e),
             };
             let views = Views::rgb(np, frames).map_err(raised)?;
-            let edge_views = edges
-                .map(|e| Views::gray(np, e))
-                .transpose()
-                .map_err(raised)?;
-            let edge_arg = edge_views
-                .as_ref()
-                .map_or_else(|| py.None().into_bound(py), |v| v.list.clone().into_any());
+            let edge_views = match extra {
+                Extra::Edges(e) => Some(Views::gray(np, e).map_err(raised)?),
+                _ => None,
+            };
+            let second = match (&extra, &edge_views) {
+                (Extra::Boxes(b), _) => Some(boxes::to_python(py, b).map_err(raised)?),
+                (_, Some(v)) => Some(v.list.clone().into_any()),
+                _ if self.takes_edges => Some(py.None().into_bound(py)),
+                _ => None,
+            };
             let object = self.object.bind(py);
-            let called = if self.takes_edges {
-                object.call_method1(method, (&views.list, edge_arg))
-            } else {
-                object.call_method1(method, (&views.list,))
+            let called = match second {
+                Some(arg) => object.call_method1(method, (&views.list, arg)),
+                None => object.call_method1(method, (&views.list,)),
             };
             let result = called.map_err(raised).and_then(|r| {
                 read(np, &r).map_err(|(frame, reason)| PythonStageError::Malformed {
@@ -192,17 +206,22 @@ struct PythonPose {
     stage: Stage,
     layout: PoseLayout,
     names: Vec<String>,
+    /// `estimate(self, frames, boxes)`: the stage wants the subject's boxes.
+    takes_boxes: bool,
 }
 
-impl PoseEstimator for PythonPose {
-    fn keypoint_names(&self) -> Vec<String> {
-        self.names.clone()
-    }
-
-    fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError> {
+impl PythonPose {
+    /// The poses of `frames` from the stage's `estimate`, with `boxes` as its second argument
+    /// when given (the stage takes them).
+    fn run(
+        &mut self,
+        frames: &[Frame],
+        boxes: Option<&[Option<PersonBox>]>,
+    ) -> Result<Vec<Pose>, StageError> {
         let k = self.layout.native().len();
         let (layout, n) = (self.layout, self.names.len());
-        self.stage.call(frames, None, |np, result| {
+        let extra = boxes.map_or(Extra::Nothing, Extra::Boxes);
+        self.stage.call(frames, extra, |np, result| {
             let items = output::items(result, frames.len()).map_err(|r| (first(frames), r))?;
             items
                 .iter()
@@ -225,6 +244,33 @@ impl PoseEstimator for PythonPose {
                 .collect()
         })
     }
+}
+
+impl PoseEstimator for PythonPose {
+    fn keypoint_names(&self) -> Vec<String> {
+        self.names.clone()
+    }
+
+    fn estimate(&mut self, frames: &[Frame]) -> Result<Vec<Pose>, StageError> {
+        self.run(frames, None)
+    }
+
+    /// A stage whose `estimate` takes a second argument gets the subject's box per frame (a
+    /// top-down model crops there); either way the frames without the subject are empty.
+    fn estimate_subject(
+        &mut self,
+        frames: &[Frame],
+        subject: &[Option<PersonBox>],
+    ) -> Result<Vec<Pose>, StageError> {
+        let boxes = self.takes_boxes.then_some(subject);
+        let mut poses = self.run(frames, boxes)?;
+        for (pose, at) in poses.iter_mut().zip(subject) {
+            if at.is_none() {
+                *pose = Pose::empty(pose.keypoints.len());
+            }
+        }
+        Ok(poses)
+    }
 
     fn reset(&mut self) {
         self.stage.call_optional("reset");
@@ -237,9 +283,9 @@ struct PythonEdge {
 
 impl EdgeDetector for PythonEdge {
     fn detect(&mut self, frames: &[Frame]) -> Result<Vec<EdgeMap>, StageError> {
-        let maps = self
-            .stage
-            .call(frames, None, |np, result| images(np, result, frames, 1))?;
+        let maps = self.stage.call(frames, Extra::Nothing, |np, result| {
+            images(np, result, frames, 1)
+        })?;
         Ok(maps
             .into_iter()
             .zip(frames)
@@ -266,9 +312,11 @@ impl ImageRegenerator for PythonRegenerator {
         frames: &[Frame],
         edges: Option<&[EdgeMap]>,
     ) -> Result<Vec<Frame>, StageError> {
-        let images = self
-            .stage
-            .call(frames, edges, |np, result| images(np, result, frames, 3))?;
+        let images = self.stage.call(
+            frames,
+            edges.map_or(Extra::Nothing, Extra::Edges),
+            |np, result| images(np, result, frames, 3),
+        )?;
         Ok(images
             .into_iter()
             .zip(frames)
