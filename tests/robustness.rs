@@ -119,6 +119,25 @@ fn a_reencoded_video_a_run_s_keypoints_and_a_model_without_feet_give_the_same_an
             "{file}"
         );
     }
+    // `gait review --keypoints` on the same file reads the same run.json: the page's analysis
+    // gives the run's events (before, it had no frame size and found 2 + 2 other cycles).
+    let src = gait_review::ReviewSource::from_keypoints(
+        &original.join("keypoints.csv"),
+        None,
+        30.0,
+        None,
+        None,
+    )
+    .unwrap();
+    assert_eq!(src.kin.frame_size, Some([1768, 994]));
+    let page = gait_kin::analyse(&src.seq, &src.post, &src.kin).unwrap();
+    let page_events: Vec<(String, String, i64)> = page
+        .events
+        .iter()
+        .map(|e| (e.side.name().into(), e.event.name().into(), e.frame as i64))
+        .collect();
+    assert_eq!(page_events, ev);
+
     // Without run.json the frame rate must be given, and the message says so.
     let alone = dir.path().join("alone.csv");
     std::fs::copy(original.join("keypoints.csv"), &alone).unwrap();
