@@ -66,10 +66,14 @@ impl EventKeypoints {
 pub trait EventDetector {
     fn detect(&self, t: &Tracks, dirs: &[Direction]) -> Vec<Event>;
 
-    /// How close the detector's decisions came to its thresholds (run.json); none by default.
-    fn margins(&self, t: &Tracks, dirs: &[Direction]) -> Vec<EventMargin> {
-        let _ = (t, dirs);
-        Vec::new()
+    /// The events and how close the detector's decisions came to its thresholds (run.json),
+    /// from one detection; no margins by default.
+    fn detect_with_margins(
+        &self,
+        t: &Tracks,
+        dirs: &[Direction],
+    ) -> (Vec<Event>, Vec<EventMargin>) {
+        (self.detect(t, dirs), Vec::new())
     }
 }
 
@@ -342,16 +346,20 @@ impl ZeniRefined {
 
 impl EventDetector for ZeniRefined {
     fn detect(&self, t: &Tracks, dirs: &[Direction]) -> Vec<Event> {
-        let Some((mut ev, _)) = self.both_sides(t, dirs) else {
-            return Vec::new();
+        self.detect_with_margins(t, dirs).0
+    }
+
+    fn detect_with_margins(
+        &self,
+        t: &Tracks,
+        dirs: &[Direction],
+    ) -> (Vec<Event>, Vec<EventMargin>) {
+        let Some((mut ev, margins)) = self.both_sides(t, dirs) else {
+            return (Vec::new(), Vec::new());
         };
         sort(&mut ev);
         drop_implausible_toe_offs(&mut ev, self.min_stance_share);
-        ev
-    }
-
-    fn margins(&self, t: &Tracks, dirs: &[Direction]) -> Vec<EventMargin> {
-        self.both_sides(t, dirs).map(|x| x.1).unwrap_or_default()
+        (ev, margins)
     }
 }
 

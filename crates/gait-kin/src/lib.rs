@@ -266,14 +266,12 @@ fn run_chain(
         });
     }
     let event_keypoints = feet::event_keypoints(t, kin, &mut warnings);
-    let (mut events, from_file) = match &kin.events_csv {
-        Some(p) => (events::read_csv(p)?, true),
-        None => (steps.events.detect(t, &dirs.per_frame), false),
-    };
-    let event_margins = if from_file {
-        Vec::new()
-    } else {
-        steps.events.margins(t, &dirs.per_frame)
+    let (mut events, event_margins, from_file) = match &kin.events_csv {
+        Some(p) => (events::read_csv(p)?, Vec::new(), true),
+        None => {
+            let (ev, margins) = steps.events.detect_with_margins(t, &dirs.per_frame);
+            (ev, margins, false)
+        }
     };
     if enforce_bouts {
         events.retain(|e| bouts::bout_of(&bouts, e.frame).is_some());
