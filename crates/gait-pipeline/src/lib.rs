@@ -5,6 +5,7 @@
 pub use gait_core::atomic;
 mod cache;
 pub mod config;
+mod config_origin;
 mod driver;
 pub mod edges;
 mod error;
