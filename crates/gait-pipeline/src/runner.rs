@@ -187,10 +187,7 @@ fn run_from(
     if out.all.is_empty() {
         return Err(PipelineError::input(
             &opts.input,
-            format!(
-                "no frames in the selected range (first_frame = {})",
-                config.input.first_frame
-            ),
+            info.no_frames_in(config.input.first_frame, config.input.last_frame),
         ));
     }
     let (seq, selection) = assemble(config, fps, &names, &out);
