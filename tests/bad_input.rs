@@ -575,8 +575,17 @@ fn nobody_walking_still_completes_and_says_so() {
     let out = dir.path().join("out");
     let done = common::run_ok(&mut run_on(&folder, &out, &[]));
     let err = String::from_utf8_lossy(&done.stderr);
-    assert!(err.contains("no walking bout found"), "{err}");
+    assert!(err.contains("no result: no walking bout found"), "{err}");
+    assert!(
+        err.lines()
+            .filter(|l| l.contains("complete cycles"))
+            .count()
+            <= 1,
+        "one line for the missing cycles: {err}"
+    );
     let run = common::read_json(&out.join("run.json"));
+    assert_eq!(run["status"], "no_result", "{}", run["status"]);
+    assert_eq!(run["reason"], "no walking bout found");
     assert_eq!(
         run["subject"]["walking"],
         serde_json::json!(false),

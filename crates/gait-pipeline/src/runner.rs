@@ -196,6 +196,8 @@ fn run_from(
     let manifest = RunManifest {
         tool: "gait",
         version: env!("CARGO_PKG_VERSION"),
+        status: "done",
+        reason: None,
         started_unix,
         command: opts.command.clone(),
         input: InputRecord {
@@ -443,6 +445,10 @@ fn kinematics(
         "kinematics".into(),
         serde_json::to_value(&kin).unwrap_or_default(),
     );
+    summary.manifest.reason = crate::manifest::no_result_reason(&kin);
+    if summary.manifest.reason.is_some() {
+        summary.manifest.status = "no_result";
+    }
     summary.write_manifest(out)?;
     summary.kinematics = Some(kin);
     Ok(())

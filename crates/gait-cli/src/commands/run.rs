@@ -67,8 +67,9 @@ pub fn run_and_report(config: &PipelineConfig, opts: &RunOptions) -> Result<(), 
     let walked = summary.kinematics.as_ref().map_or(String::new(), |k| {
         let bouts = k.bouts.len();
         let (yes, no) = (&k.cycles_accepted, &k.cycles_rejected);
-        if bouts == 0 {
-            "; no walking bout found, so no cycles".into()
+        if let Some(why) = &summary.manifest.reason {
+            // The run completed (exit 0) but has nothing to measure; run.json says "no_result".
+            format!("; no result: {why}")
         } else {
             format!(
                 "; {bouts} walking bout(s), cycles accepted left {} right {} (rejected {})",
