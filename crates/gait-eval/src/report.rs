@@ -97,7 +97,10 @@ figure{margin:12px 0}figure svg,figure img{max-width:100%;height:auto;border:1px
 table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:left;font-size:13px}\
 th{background:#f0f0f0}.warnings li{color:#8a4b00}pre{background:#f6f6f6;padding:8px;overflow:auto;font-size:12px;white-space:pre-wrap;word-break:break-all}\
 video{max-width:100%;border:1px solid #ddd}.no-cycles{color:#8a4b00;font-weight:bold}\
-@page{size:A4;margin:12mm}@media print{body{margin:0;max-width:none}figure,table{break-inside:avoid}video{display:none}h2{break-after:avoid}}";
+table.provenance td{font-family:monospace;overflow-wrap:anywhere}\
+@page{size:A4;margin:12mm}\
+@media print{body{margin:0;max-width:none}figure{break-inside:avoid}tr{break-inside:avoid}video,details.manifest{display:none}h2{break-after:avoid}\
+table{width:100%;table-layout:auto}td,th{font-size:9.5px;padding:2px 4px}}";
 
 /// The largest overlay.mp4 embedded in report.html (base64 adds a third): a page that plays
 /// its video anywhere, without growing past a few MB.
@@ -248,10 +251,7 @@ impl Report {
             body.push_str("</ul>");
         }
         if let Some(m) = &self.manifest {
-            body.push_str("<h2>Run manifest (run.json)</h2>");
-            let text = serde_json::to_string_pretty(m)
-                .map_err(|e| EvalError::io("formatting run.json", e.into()))?;
-            body.push_str(&format!("<pre>{}</pre>", escape(&text)));
+            body.push_str(&crate::provenance::section(m));
         }
         Ok(format!(
             "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title><style>{STYLE}</style></head><body>{body}</body></html>\n",

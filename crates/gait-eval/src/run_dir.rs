@@ -174,6 +174,17 @@ fn collect_warnings(v: &Value, out: &mut Vec<String>) {
     }
 }
 
+/// A CSV cell as the report shows it: numbers to 3 decimals (the CSV keeps them all), so a
+/// table of many columns fits a printed page.
+fn shown(cell: &str) -> String {
+    match cell.split_once('.') {
+        Some((_, decimals)) if decimals.len() > 3 && cell.parse::<f64>().is_ok() => {
+            format!("{:.3}", cell.parse::<f64>().unwrap_or(f64::NAN))
+        }
+        _ => cell.to_string(),
+    }
+}
+
 fn read_table(path: &Path, title: &str) -> Result<Table, EvalError> {
     let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
     let header = r
@@ -187,7 +198,7 @@ fn read_table(path: &Path, title: &str) -> Result<Table, EvalError> {
         rows.push(
             rec.map_err(|e| EvalError::input(path, e))?
                 .iter()
-                .map(str::to_string)
+                .map(shown)
                 .collect(),
         );
     }
@@ -219,6 +230,15 @@ mod tests {
             html.contains("src=\"overlay.mp4\"")
                 && html.contains("a copy of the page alone shows no video")
         );
+    }
+
+    #[test]
+    fn table_numbers_are_shown_to_three_decimals() {
+        assert_eq!(shown("1.266667"), "1.267");
+        assert_eq!(shown("0.5"), "0.5");
+        assert_eq!(shown("117"), "117");
+        assert_eq!(shown("left"), "left");
+        assert_eq!(shown("a.bcdef"), "a.bcdef");
     }
 
     #[test]
