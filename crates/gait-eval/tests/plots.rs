@@ -258,8 +258,7 @@ fn map_legend_is_above_the_bars_and_the_axis_has_four_ticks() {
     assert_eq!(bars.len(), 8, "two bars per group: {rects:?}");
     let legend = rects
         .iter()
-        .filter(|r| r.contains("#FFFFFF") && r.contains("opacity=\"0.8\""))
-        .last()
+        .rfind(|r| r.contains("#FFFFFF") && r.contains("opacity=\"0.8\""))
         .expect("legend box");
     let legend_bottom = attr(legend, "y") + attr(legend, "height");
     let top_of_bars = bars.iter().map(|r| attr(r, "y")).fold(f64::MAX, f64::min);
