@@ -165,7 +165,7 @@ fn edges_are_written_at_the_controlnet_size() {
             .arg(sample_video())
             .arg("--out")
             .arg(&out),
-        &["[edge]", "none"],
+        &["edge.kind", "none"],
     );
 }
 
