@@ -168,7 +168,7 @@ fn unknown_stage_kind_lists_the_choices() {
             .arg(common::sample_video())
             .arg("--out")
             .arg(dir.path().join("out")),
-        &["[edge]", "sobelx", "none"],
+        &["--set edge.kind=sobelx", "edge.kind", "sobelx", "none"],
     );
     fails_with(
         gait()
@@ -182,7 +182,79 @@ fn unknown_stage_kind_lists_the_choices() {
             .arg(common::sample_video())
             .arg("--out")
             .arg(dir.path().join("out")),
-        &["[pose]", "tensorrt", "candle", "ort"],
+        &[
+            "--set pose.backend=tensorrt",
+            "pose.backend",
+            "tensorrt",
+            "candle",
+            "ort",
+        ],
+    );
+}
+
+/// Every config error names `table.key` and the place the value came from: the `--set`
+/// option, or the file and its line (never the built-in default the value did not come from).
+#[test]
+fn config_errors_name_the_key_and_its_origin() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |config: Option<&Path>, sets: &[&str], needles: &[&str]| {
+        let mut cmd = gait();
+        cmd.args(["run", "--no-progress"]);
+        if let Some(c) = config {
+            cmd.arg("--config").arg(c);
+        }
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        cmd.arg("--input")
+            .arg(common::sample_video())
+            .arg("--out")
+            .arg(dir.path().join("out"));
+        let err = fails_with(&mut cmd, needles);
+        assert!(!err.contains("built in"), "{err}");
+        assert!(
+            !dir.path().join("out").exists(),
+            "a failed run left its folder"
+        );
+    };
+    run(
+        None,
+        &["pose.backnd=ort"],
+        &["--set pose.backnd=ort", "pose.backnd", "unknown field"],
+    );
+    run(
+        None,
+        &["pose.backend=nonsense"],
+        &[
+            "--set pose.backend=nonsense",
+            "pose.backend",
+            "nonsense",
+            "candle",
+        ],
+    );
+    run(
+        None,
+        &["regenerator.kind=controlnet", "regenerator.crop_size=300"],
+        &[
+            "--set regenerator.crop_size=300",
+            "regenerator.crop_size",
+            "array of length 2",
+        ],
+    );
+    let cfg = dir.path().join("study.toml");
+    std::fs::write(
+        &cfg,
+        "# a study\n[pose]\nkind = \"blazepose\"\nbackend = 3\n",
+    )
+    .unwrap();
+    run(
+        Some(&cfg),
+        &[],
+        &[
+            "study.toml line 4",
+            "pose.backend",
+            "invalid type: integer `3`",
+        ],
     );
 }
 
@@ -294,6 +366,35 @@ fn missing_model_file_names_the_fetch_command() {
         &["pose_detection.tflite", "gait models fetch blazepose"],
     );
     assert_no_results(&out);
+    assert!(!out.exists(), "a failed run left an empty folder behind");
+}
+
+#[test]
+fn zero_shot_without_weights_names_the_fetch_command_and_the_folders() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let models = dir.path().join("no-models");
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/zero-shot-canny.toml");
+    let sd = models.join("stable-diffusion-v1-5");
+    let cn = models.join("sd-controlnet-canny");
+    fails_with(
+        gait()
+            .args(["run", "--no-progress", "--models-dir"])
+            .arg(&models)
+            .arg("--config")
+            .arg(&config)
+            .arg("--input")
+            .arg(common::sample_video())
+            .arg("--out")
+            .arg(&out),
+        &[
+            "gait models fetch sd15-controlnet-canny",
+            "fetched elsewhere",
+            &sd.display().to_string(),
+            &cn.display().to_string(),
+        ],
+    );
+    assert!(!out.exists(), "a failed run left an empty folder behind");
 }
 
 #[test]
@@ -474,8 +575,17 @@ fn nobody_walking_still_completes_and_says_so() {
     let out = dir.path().join("out");
     let done = common::run_ok(&mut run_on(&folder, &out, &[]));
     let err = String::from_utf8_lossy(&done.stderr);
-    assert!(err.contains("no walking bout found"), "{err}");
+    assert!(err.contains("no result: no walking bout found"), "{err}");
+    assert!(
+        err.lines()
+            .filter(|l| l.contains("complete cycles"))
+            .count()
+            <= 1,
+        "one line for the missing cycles: {err}"
+    );
     let run = common::read_json(&out.join("run.json"));
+    assert_eq!(run["status"], "no_result", "{}", run["status"]);
+    assert_eq!(run["reason"], "no walking bout found");
     assert_eq!(
         run["subject"]["walking"],
         serde_json::json!(false),
@@ -501,7 +611,12 @@ fn a_range_past_the_end_of_the_video() {
     let out = dir.path().join("out");
     fails_with(
         &mut run_on(&common::sample_video(), &out, &["input.first_frame=5000"]),
-        &["no frames in the selected range", "first_frame = 5000"],
+        &[
+            "no frames in the selected range",
+            "first_frame = 5000",
+            "the input has 230 frames (0 to 229)",
+        ],
     );
     assert_no_results(&out);
+    assert!(!out.exists(), "a failed run left an empty folder behind");
 }

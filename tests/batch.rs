@@ -411,3 +411,48 @@ fn bad_studies_are_refused_before_anything_runs() {
         &["not a batch folder"],
     );
 }
+
+/// A row whose run completes without a walking bout is "no result: REASON" in `gait batch
+/// status` and the cohort table, not "done"; the batch still exits 0 (nothing failed) and says
+/// how many rows are empty. Local executor only: no Slurm needed.
+#[test]
+fn a_run_without_walking_is_no_result_not_done() {
+    let dir = tempfile::tempdir().unwrap();
+    // The first 12 frames: only the man on the box is in view, standing.
+    cut("0", "12", &dir.path().join("standing.mp4"));
+    let study = dir.path().join("study.csv");
+    std::fs::write(
+        &study,
+        "video,subject,session,view,prosthetic_side,config,set\n\
+         standing.mp4,S09,1,left,,,report.pdf=false;report.overlay=false\n",
+    )
+    .unwrap();
+    let out = dir.path().join("study");
+    let mut cmd = gait();
+    cmd.arg("--models-dir")
+        .arg(models_dir())
+        .arg("batch")
+        .arg(&study)
+        .arg("--out")
+        .arg(&out);
+    let done = run_ok(&mut cmd);
+    assert!(
+        stderr(&done).contains("1 with no result"),
+        "{}",
+        stderr(&done)
+    );
+    let status = run_ok(gait().args(["batch", "status"]).arg(&out));
+    let text = String::from_utf8_lossy(&status.stdout);
+    assert!(
+        text.contains("no result") && text.contains("no result: no walking bout found"),
+        "{text}"
+    );
+    assert!(!text.contains(" done "), "{text}");
+    let cohort = std::fs::read_to_string(out.join("cohort.csv")).unwrap();
+    assert!(
+        cohort.contains("no result") && cohort.contains("no walking bout found"),
+        "{cohort}"
+    );
+    let html = std::fs::read_to_string(out.join("cohort.html")).unwrap();
+    assert!(html.contains("1 without results"), "{html}");
+}

@@ -165,7 +165,7 @@ fn edges_are_written_at_the_controlnet_size() {
             .arg(sample_video())
             .arg("--out")
             .arg(&out),
-        &["[edge]", "none"],
+        &["edge.kind", "none"],
     );
 }
 
@@ -379,4 +379,50 @@ fn inpainting_runs_on_a_pose_of_the_original_frames() {
     // rather than taken from the cache.
     let other = run(&dir.path().join("c"), &["pose.person=\"leftmost\""]);
     assert_eq!(stage(&other, "regenerator", "computed"), 2);
+}
+
+/// The matrix file of docs/ablate.md runs as documented: four runs scored against the truth,
+/// and the page shows the file as it is.
+#[test]
+fn the_documented_ablate_example_runs() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let matrix = root.join("examples/ablate/matrix.toml");
+    let text = std::fs::read_to_string(&matrix).unwrap();
+    let doc = std::fs::read_to_string(root.join("docs/ablate.md")).unwrap();
+    for line in text
+        .lines()
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+    {
+        assert!(
+            doc.contains(line),
+            "docs/ablate.md lacks `{line}` of the example"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ablation");
+    run_ok(
+        gait()
+            .args(["ablate", "--no-progress", "--models-dir"])
+            .arg(models_dir())
+            .arg("--matrix")
+            .arg(&matrix)
+            .arg("--out")
+            .arg(&out),
+    );
+    let table = std::fs::read_to_string(out.join("comparison.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .skip(1)
+        .map(|r| r.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 4, "{table}");
+    for r in &rows {
+        // video, config (two quoted parts), frames, ..., px_err_prosthetic, ..., error.
+        assert_eq!(r[3], "10", "{table}");
+        assert!(
+            r[7].parse::<f64>().is_ok(),
+            "scored against the truth: {table}"
+        );
+        assert_eq!(*r.last().unwrap(), "\"\"", "no error: {table}");
+    }
 }

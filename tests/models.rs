@@ -201,3 +201,55 @@ fn list_shows_hub_models_missing_then_present() {
         "{after}"
     );
 }
+
+/// Present and valid BlazePose files are checked and left alone; `--force` is what fetches
+/// them again (here from the wheel in the folder, so no network is needed).
+#[test]
+fn blazepose_present_is_checked_not_rewritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = common::models_dir().join("blazepose");
+    let dst = dir.path().join("blazepose");
+    std::fs::create_dir_all(&dst).unwrap();
+    let files = [
+        "pose_detection.tflite",
+        "pose_landmark_full.tflite",
+        "selfie_segmentation.tflite",
+        "pose_detection.onnx",
+        "pose_landmark_full.onnx",
+    ];
+    for f in files {
+        std::fs::copy(src.join(f), dst.join(f)).unwrap();
+    }
+    let stamp = |f: &str| std::fs::metadata(dst.join(f)).unwrap().modified().unwrap();
+    let before: Vec<_> = files.iter().map(|f| stamp(f)).collect();
+    let out = run_ok(&mut fetch(dir.path(), &closed_endpoint(), &["blazepose"]));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("present and checked") && err.contains("--force"),
+        "{err}"
+    );
+    let after: Vec<_> = files.iter().map(|f| stamp(f)).collect();
+    assert_eq!(before, after, "present files were rewritten");
+    assert!(!dst.join("wheel").exists(), "nothing was downloaded");
+
+    // A damaged file is named and fetched again; with the wheel at hand no network is needed.
+    let wheel = dst.join("wheel");
+    std::fs::create_dir_all(&wheel).unwrap();
+    let name = gait_pose::blazepose::fetch::WHEEL_NAME;
+    std::fs::copy(src.join("wheel").join(name), wheel.join(name)).unwrap();
+    std::fs::write(dst.join("pose_landmark_full.onnx"), b"broken").unwrap();
+    let out = run_ok(&mut fetch(dir.path(), &closed_endpoint(), &["blazepose"]));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("pose_landmark_full.onnx") && err.contains("fetching again"),
+        "{err}"
+    );
+    let out = run_ok(&mut fetch(dir.path(), &closed_endpoint(), &["blazepose"]));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("present and checked"));
+    let out = run_ok(&mut fetch(
+        dir.path(),
+        &closed_endpoint(),
+        &["blazepose", "--force"],
+    ));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("present and checked"));
+}

@@ -323,6 +323,70 @@ fn report_in_chromium_has_every_section_no_broken_image_and_no_overlap() {
     assert_eq!(r["overlaps"].as_array().unwrap().len(), 1, "{r}");
 }
 
+/// pdftotext of one page, with a header cell broken after an underscore joined again.
+fn pdf_page(pdf: &Path, page: usize) -> String {
+    let n = page.to_string();
+    let pdf = pdf.to_str().unwrap();
+    tool("pdftotext", &["-f", &n, "-l", &n, pdf, "-"]).replace("_\n", "_")
+}
+
+#[test]
+fn pdf_pages_fit_every_table_column_and_end_with_a_short_provenance() {
+    let run = sample_run();
+    let pdf = run.join("report.pdf");
+    let info = tool("pdfinfo", &[pdf.to_str().unwrap()]);
+    let pages: usize = info
+        .lines()
+        .find_map(|l| l.strip_prefix("Pages:"))
+        .and_then(|n| n.trim().parse().ok())
+        .expect("pdfinfo gives the page count");
+    // Kinematics, scores, parameters and tables of the sample run: 4 pages; the run.json
+    // dump once made it 10.
+    assert!((3..=5).contains(&pages), "{pages} pages");
+    let texts: Vec<String> = (1..=pages).map(|p| pdf_page(&pdf, p)).collect();
+    for (file, title) in [
+        (
+            "cycle_quality.csv",
+            "Cycle quality: every cycle found, kept or rejected",
+        ),
+        ("bouts.csv", "Walking bouts"),
+        ("events.csv", "Gait events"),
+    ] {
+        let csv = std::fs::read_to_string(run.join(file)).unwrap();
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let page = texts
+            .iter()
+            .position(|t| t.lines().any(|l| l.trim() == title))
+            .unwrap_or_else(|| panic!("no page has the table {title}"));
+        for column in header {
+            assert!(
+                texts[page].contains(column),
+                "page {}: the column {column} of {title} is cut off:\n{}",
+                page + 1,
+                texts[page]
+            );
+        }
+    }
+    let all = texts.concat();
+    assert!(
+        !all.contains("keypoint_names"),
+        "the manifest is not printed"
+    );
+    let last = &texts[pages - 1];
+    let tool_version = format!("gait {}", env!("CARGO_PKG_VERSION"));
+    for want in [
+        "Provenance",
+        &tool_version,
+        "Config sha256",
+        "Input sha256",
+        "run.json",
+    ] {
+        assert!(last.contains(want), "{want} not on the last page:\n{last}");
+    }
+    let m = read_json(&run.join("run.json"));
+    assert!(last.contains(m["input"]["sha256"].as_str().unwrap()));
+}
+
 #[test]
 fn pdf_scores_and_exports_are_written() {
     let run = sample_run();

@@ -368,19 +368,19 @@ fn invalid_selection_settings_are_one_line_errors() {
     let out = dir.path().join("run");
     fails_with(
         &mut run_args(&out, 150, 152, &["selection.stride=0"]),
-        &["[selection]", "stride"],
+        &["selection.", "stride"],
     );
     fails_with(
         &mut run_args(&out, 150, 152, &["selection.segment_ratio=[1.6, 0.6]"]),
-        &["[selection]", "segment_ratio"],
+        &["selection.", "segment_ratio"],
     );
     fails_with(
         &mut run_args(&out, 150, 152, &["selection.side_ratio=[0.5]"]),
-        &["[selection]", "side_ratio"],
+        &["selection.", "side_ratio"],
     );
     fails_with(
         &mut run_args(&out, 150, 152, &["selection.mode=some"]),
-        &["[selection]", "some", "poor"],
+        &["selection.", "some", "poor"],
     );
     fails_with(
         &mut run_args(&out, 150, 152, &["selection.stide=2"]),
@@ -393,7 +393,7 @@ fn invalid_selection_settings_are_one_line_errors() {
             152,
             &["selection.mode=poor", "selection.keypoints=[\"left_paw\"]"],
         ),
-        &["[selection]", "left_paw", "left_knee"],
+        &["selection.", "left_paw", "left_knee"],
     );
 }
 

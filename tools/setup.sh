@@ -3,7 +3,7 @@
 # Installs what a fresh machine lacks and caches every download inside the
 # build folder (target/), so later runs are offline and quick.
 #   - Debian packages: ffmpeg (video decoding), fonts-dejavu-core (plots),
-#     chromium (report test)
+#     chromium (report test), poppler-utils (pdftotext/pdfinfo: the PDF test)
 #   - ONNX Runtime shared library from the PyPI wheel onnxruntime==1.31.1
 #     (the ort backend loads it at run time)
 # Source it: it exports ORT_DYLIB_PATH and GAIT_MODELS_DIR.
@@ -16,6 +16,7 @@ need_apt=()
 command -v ffmpeg >/dev/null || need_apt+=(ffmpeg)
 [ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || need_apt+=(fonts-dejavu-core)
 command -v chromium >/dev/null || need_apt+=(chromium)
+command -v pdftotext >/dev/null || need_apt+=(poppler-utils)
 # libjpeg-turbo's bundled build (the turbojpeg crate, gait-pipeline's JPEG reader): cmake, and
 # nasm for its SIMD code (what OpenCV and Pillow run).
 command -v cmake >/dev/null || need_apt+=(cmake)

@@ -1,5 +1,5 @@
-//! `cohort.csv`: one row per video and side (a failed video: one row with its error), from the
-//! files each run folder holds.
+//! `cohort.csv`: one row per video and side (a failed video, or one with no result: one row with
+//! the error or the reason), from the files each run folder holds.
 
 use std::path::Path;
 
@@ -8,7 +8,7 @@ use gait_eval::spatiotemporal::read_spatiotemporal;
 use serde_json::Value;
 
 use crate::plan::{Plan, PlannedRow, run_dir};
-use crate::state::{self, RowState};
+use crate::state;
 
 /// Spatiotemporal parameters copied per side (cadence is for both sides together).
 const PARAMS: [&str; 6] = [
@@ -146,7 +146,8 @@ fn peak_and_range(curves: &[CycleCurve], joint: &str) -> (f64, f64) {
     }
 }
 
-/// The rows of one video: two sides when it ran, one with the error when not.
+/// The rows of one video: two sides when it ran with a result, one with the error or the reason
+/// when not.
 fn rows_of(out: &Path, row: &PlannedRow, done: bool) -> Vec<CohortRow> {
     let dir = run_dir(out, row);
     let blank = |side: &str, status: &str, error: String| CohortRow {
@@ -168,6 +169,9 @@ fn rows_of(out: &Path, row: &PlannedRow, done: bool) -> Vec<CohortRow> {
             None => ("not run", "the run did not finish".to_string()),
         };
         return vec![blank("", status, error)];
+    }
+    if let Some(why) = state::no_result(out, row) {
+        return vec![blank("", "no result", why)];
     }
     let manifest = read_json(&dir.join("run.json")).unwrap_or_default();
     let curves = read_cycles_csv(&dir.join("cycles.csv")).unwrap_or_default();
@@ -217,7 +221,7 @@ pub fn collect(out: &Path, plan: &Plan) -> Vec<CohortRow> {
         .iter()
         .flat_map(|row| {
             let config = Plan::config(out, row).ok();
-            let done = state::row_state(out, row, config.as_ref()) == RowState::Done;
+            let done = state::row_state(out, row, config.as_ref()).finished();
             rows_of(out, row, done)
         })
         .collect()

@@ -16,6 +16,8 @@ pub const ERROR_FILE: &str = "batch-error.txt";
 #[serde(rename_all = "snake_case")]
 pub enum RowState {
     Done,
+    /// Complete, but with nothing to measure (run.json's `"status": "no_result"`).
+    NoResult,
     Failed,
     /// Queued or running on Slurm.
     Running,
@@ -26,6 +28,7 @@ impl RowState {
     pub fn name(&self) -> &'static str {
         match self {
             RowState::Done => "done",
+            RowState::NoResult => "no result",
             RowState::Failed => "failed",
             RowState::Running => "running",
             RowState::NotRun => "not run",
@@ -44,6 +47,25 @@ pub fn is_complete(out: &Path, row: &PlannedRow, config: &PipelineConfig) -> boo
     };
     let want = serde_json::to_value(config).unwrap_or_default();
     v.get("config") == Some(&want) && v.get("report").is_some()
+}
+
+impl RowState {
+    /// Done or with no result: the run completed and is not run again.
+    pub fn finished(&self) -> bool {
+        matches!(self, RowState::Done | RowState::NoResult)
+    }
+}
+
+/// Why a complete run has no result (run.json's `reason` when its status is "no_result").
+pub fn no_result(out: &Path, row: &PlannedRow) -> Option<String> {
+    let text = std::fs::read_to_string(run_dir(out, row).join("run.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    (v.get("status")?.as_str()? == "no_result").then(|| {
+        v.get("reason")
+            .and_then(|r| r.as_str())
+            .unwrap_or("nothing to measure")
+            .to_string()
+    })
 }
 
 /// The error a failed task left, if any.
@@ -69,7 +91,11 @@ pub fn clear_failure(out: &Path, row: &PlannedRow) {
 /// The row's state from its folder alone (Slurm's queue is asked elsewhere).
 pub fn row_state(out: &Path, row: &PlannedRow, config: Option<&PipelineConfig>) -> RowState {
     if config.is_some_and(|c| is_complete(out, row, c)) {
-        RowState::Done
+        if no_result(out, row).is_some() {
+            RowState::NoResult
+        } else {
+            RowState::Done
+        }
     } else if failure(out, row).is_some() {
         RowState::Failed
     } else {

@@ -120,21 +120,21 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> HubError + '_ {
     }
 }
 
-/// Downloads every file of `repos` not already on disk into `models_dir`;
-/// returns the files written.
+/// Downloads every file of `repos` not already on disk (every file when
+/// `force`) into `models_dir`; returns the files written.
 ///
 /// `HF_ENDPOINT` replaces the Hub's address, `HF_TOKEN` (or the token file of
 /// `HF_HOME`) authenticates. Each file is downloaded under a temporary folder
 /// inside `models_dir`, checked against the Hub's checksum and only then
 /// renamed to its destination; the temporary folder is always removed.
-pub fn fetch(repos: &[HubRepo], models_dir: &Path) -> Result<Vec<PathBuf>, HubError> {
+pub fn fetch(repos: &[HubRepo], models_dir: &Path, force: bool) -> Result<Vec<PathBuf>, HubError> {
     let wanted: Vec<HubRepo> = repos
         .iter()
         .map(|r| HubRepo {
             files: r
                 .files
                 .iter()
-                .filter(|(_, d)| !d.is_file())
+                .filter(|(_, d)| force || !d.is_file())
                 .cloned()
                 .collect(),
             ..r.clone()

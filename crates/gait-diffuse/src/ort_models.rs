@@ -24,7 +24,8 @@ pub const ONNX_VAE: &str = "vae_decoder/model.onnx";
 pub const ONNX_VAE_ENCODER: &str = "vae_encoder/model.onnx";
 /// The tokenizer merges the export script copies next to the graphs.
 pub const ONNX_MERGES: &str = "tokenizer/merges.txt";
-const EXPORT_HINT: &str = "export them from the diffusers-layout SD 1.5 and ControlNet folders with \
+const EXPORT_HINT: &str = "export them from the diffusers-layout SD 1.5 and ControlNet folders \
+     (`gait models fetch sd15-controlnet-canny` downloads those) with \
      `python tools/diffuse/export_onnx.py --sd SD_DIR --controlnet CONTROLNET_DIR --out`";
 
 /// Every file the ort backend reads from `onnx_dir` (graphs, their external

@@ -48,8 +48,10 @@ pub fn check_files(sd_dir: &Path, controlnet_dir: &Path) -> Result<(), DiffuseEr
     Err(DiffuseError::Missing {
         files: missing,
         hint: format!(
-            "put the diffusers-layout files of runwayml/stable-diffusion-v1-5 (unet/, vae/, \
-             text_encoder/, tokenizer/) in {} and of lllyasviel/sd-controlnet-canny in {}",
+            "run `gait models fetch sd15-controlnet-canny` (into the models folder, \
+             --models-dir or GAIT_MODELS_DIR), or put files fetched elsewhere there: the \
+             diffusers-layout files of stable-diffusion-v1-5 (unet/, vae/, text_encoder/, \
+             tokenizer/) in {} and of lllyasviel/sd-controlnet-canny in {}",
             sd_dir.display(),
             controlnet_dir.display()
         ),

@@ -25,7 +25,8 @@ pub(crate) fn table(header: &[String], rows: &[Vec<String>]) -> String {
     };
     let mut out = String::from("<table><thead><tr>");
     for h in header {
-        out.push_str(&cell("th", h));
+        // Column names like swapped_frames may break after an underscore to fit a printed page.
+        out.push_str(&cell("th", h).replace('_', "_<wbr>"));
     }
     out.push_str("</tr></thead><tbody>");
     for r in rows {

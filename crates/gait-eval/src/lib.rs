@@ -22,6 +22,7 @@ pub mod openpose;
 mod options;
 pub mod pdf;
 pub mod plot;
+pub mod provenance;
 pub mod reliability;
 pub mod report;
 pub mod report_config;

@@ -45,6 +45,9 @@ pub struct Report {
     pub spatiotemporal: Vec<StParam>,
     /// Files of the run folder linked from the report (overlay video, exports).
     pub exports: Vec<String>,
+    /// overlay.mp4 itself when it is small enough to travel inside the page
+    /// ([`EMBED_VIDEO_MAX`]); otherwise the page links the file beside it.
+    pub overlay_video: Option<Vec<u8>>,
     /// Ground-truth cycles and other methods' cycles, for the comparison figure.
     pub truth_cycles: Vec<CycleCurve>,
     pub method_cycles: Vec<(String, Vec<CycleCurve>)>,
@@ -75,6 +78,7 @@ impl Default for Report {
             scores: None,
             spatiotemporal: vec![],
             exports: vec![],
+            overlay_video: None,
             truth_cycles: vec![],
             method_cycles: vec![],
             evaluations: vec![],
@@ -93,7 +97,14 @@ figure{margin:12px 0}figure svg,figure img{max-width:100%;height:auto;border:1px
 table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:left;font-size:13px}\
 th{background:#f0f0f0}.warnings li{color:#8a4b00}pre{background:#f6f6f6;padding:8px;overflow:auto;font-size:12px;white-space:pre-wrap;word-break:break-all}\
 video{max-width:100%;border:1px solid #ddd}.no-cycles{color:#8a4b00;font-weight:bold}\
-@page{size:A4;margin:12mm}@media print{body{margin:0;max-width:none}figure,table{break-inside:avoid}video{display:none}h2{break-after:avoid}}";
+table.provenance td{font-family:monospace;overflow-wrap:anywhere}\
+@page{size:A4;margin:12mm}\
+@media print{body{margin:0;max-width:none}figure{break-inside:avoid}tr{break-inside:avoid}video,details.manifest{display:none}h2{break-after:avoid}\
+table{width:100%;table-layout:auto}td,th{font-size:9.5px;padding:2px 4px}}";
+
+/// The largest overlay.mp4 embedded in report.html (base64 adds a third): a page that plays
+/// its video anywhere, without growing past a few MB.
+pub const EMBED_VIDEO_MAX: u64 = 4 << 20;
 
 /// A figure's SVG inlined with its caption.
 pub(crate) fn figure(fig: &Figure, caption: &str) -> String {
@@ -240,10 +251,7 @@ impl Report {
             body.push_str("</ul>");
         }
         if let Some(m) = &self.manifest {
-            body.push_str("<h2>Run manifest (run.json)</h2>");
-            let text = serde_json::to_string_pretty(m)
-                .map_err(|e| EvalError::io("formatting run.json", e.into()))?;
-            body.push_str(&format!("<pre>{}</pre>", escape(&text)));
+            body.push_str(&crate::provenance::section(m));
         }
         Ok(format!(
             "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title><style>{STYLE}</style></head><body>{body}</body></html>\n",
@@ -251,15 +259,32 @@ impl Report {
         ))
     }
 
-    /// The overlay video, played from the run folder (a print shows its name).
+    /// The overlay video: embedded when small, else played from the run folder, which the page
+    /// says (a copy of report.html alone would show an empty player).
     fn video_section(&self) -> String {
         if !self.exports.iter().any(|f| f == "overlay.mp4") {
             return String::new();
         }
-        "<h2 id=\"overlay\">Overlay video</h2><video controls preload=\"metadata\" src=\"overlay.mp4\" width=\"960\"></video>\
-         <p>overlay.mp4: the skeleton on every analysed frame (left red, right blue), heel strikes and toe-offs as they happen; \
-         frames outside walking bouts or in rejected cycles dimmed.</p>"
-            .into()
+        let (src, where_) = match &self.overlay_video {
+            Some(bytes) => (
+                format!("data:video/mp4;base64,{}", base64(bytes)),
+                "The video is embedded in this page, so it plays wherever the page is opened."
+                    .to_string(),
+            ),
+            None => (
+                "overlay.mp4".to_string(),
+                format!(
+                    "The video is too large to embed (over {} MB): it plays from overlay.mp4 beside report.html, \
+                     so open the page in its run folder; a copy of the page alone shows no video.",
+                    EMBED_VIDEO_MAX >> 20
+                ),
+            ),
+        };
+        format!(
+            "<h2 id=\"overlay\">Overlay video</h2><video controls preload=\"metadata\" src=\"{src}\" width=\"960\"></video>\
+             <p>overlay.mp4: the skeleton on every analysed frame (left red, right blue), heel strikes and toe-offs as they happen; \
+             frames outside walking bouts or in rejected cycles dimmed. {where_}</p>"
+        )
     }
 
     /// Writes `report.html` into `out_dir`; returns its path.

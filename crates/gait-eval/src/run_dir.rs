@@ -88,6 +88,10 @@ impl Report {
             .filter(|f| dir.join(f).exists())
             .map(|f| f.to_string())
             .collect();
+        let video = dir.join("overlay.mp4");
+        if std::fs::metadata(&video).is_ok_and(|m| m.len() <= crate::report::EMBED_VIDEO_MAX) {
+            r.overlay_video = std::fs::read(&video).ok();
+        }
         r.strip = strip(dir, &r)?;
         if let Some(n) = &normative {
             r.scores = Some(Scores::compute(&r.cycles, n));
@@ -117,7 +121,10 @@ fn strip(dir: &Path, r: &Report) -> Result<Option<crate::Figure>, EvalError> {
 
 /// The corrections a person applied (run.json's kinematics summary), as a table.
 fn corrections_table(manifest: &Value) -> Option<Table> {
-    let c = manifest.pointer("/extra/kinematics/corrections")?;
+    // `"corrections": null` is a run without a corrections file: no table.
+    let c = manifest
+        .pointer("/extra/kinematics/corrections")
+        .filter(|c| !c.is_null())?;
     let n = |k: &str| c.get(k).and_then(Value::as_u64).unwrap_or(0).to_string();
     let sha = c.get("sha256").and_then(Value::as_str).unwrap_or("");
     let path = c.get("path").and_then(Value::as_str).unwrap_or("");
@@ -167,6 +174,17 @@ fn collect_warnings(v: &Value, out: &mut Vec<String>) {
     }
 }
 
+/// A CSV cell as the report shows it: numbers to 3 decimals (the CSV keeps them all), so a
+/// table of many columns fits a printed page.
+fn shown(cell: &str) -> String {
+    match cell.split_once('.') {
+        Some((_, decimals)) if decimals.len() > 3 && cell.parse::<f64>().is_ok() => {
+            format!("{:.3}", cell.parse::<f64>().unwrap_or(f64::NAN))
+        }
+        _ => cell.to_string(),
+    }
+}
+
 fn read_table(path: &Path, title: &str) -> Result<Table, EvalError> {
     let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
     let header = r
@@ -180,7 +198,7 @@ fn read_table(path: &Path, title: &str) -> Result<Table, EvalError> {
         rows.push(
             rec.map_err(|e| EvalError::input(path, e))?
                 .iter()
-                .map(str::to_string)
+                .map(shown)
                 .collect(),
         );
     }
@@ -189,4 +207,48 @@ fn read_table(path: &Path, title: &str) -> Result<Table, EvalError> {
         header,
         rows,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn overlay_video_is_embedded_when_small_and_explained_when_not() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("overlay.mp4"), b"not really a video").unwrap();
+        let html = Report::from_run_dir(dir.path(), None, None)
+            .unwrap()
+            .html()
+            .unwrap();
+        assert!(html.contains("src=\"data:video/mp4;base64,"), "embedded");
+        assert!(html.contains("plays wherever the page is opened"));
+        let mut r = Report::from_run_dir(dir.path(), None, None).unwrap();
+        r.overlay_video = None;
+        let html = r.html().unwrap();
+        assert!(
+            html.contains("src=\"overlay.mp4\"")
+                && html.contains("a copy of the page alone shows no video")
+        );
+    }
+
+    #[test]
+    fn table_numbers_are_shown_to_three_decimals() {
+        assert_eq!(shown("1.266667"), "1.267");
+        assert_eq!(shown("0.5"), "0.5");
+        assert_eq!(shown("117"), "117");
+        assert_eq!(shown("left"), "left");
+        assert_eq!(shown("a.bcdef"), "a.bcdef");
+    }
+
+    #[test]
+    fn corrections_null_is_no_corrections_table() {
+        let none = serde_json::json!({"extra": {"kinematics": {"corrections": null}}});
+        assert_eq!(corrections_table(&none), None);
+        let some = serde_json::json!({"extra": {"kinematics": {"corrections":
+            {"path": "corrections.toml", "sha256": "abcdef0123456789", "swaps": 2}}}});
+        let t = corrections_table(&some).unwrap();
+        assert!(t.title.contains("corrections.toml"), "{}", t.title);
+        assert_eq!(t.rows[0][1], "2");
+    }
 }

@@ -80,8 +80,22 @@ fn norm_in(ours: &str, n: &NormParam, leg: Option<(f64, &str)>) -> Option<(f64, 
     Some((n.mean * factor, n.sd * factor))
 }
 
+/// A normative unit as a reader takes it: Hof's dimensionless forms spelt out ("s/L" reads
+/// like seconds per litre).
+fn unit_label(unit: &str) -> String {
+    match unit {
+        "s/L" => "leg lengths (step length / leg length)".into(),
+        "v/sqrt(gL)" => "speed / √(g × leg length)".into(),
+        "f*sqrt(L/g)" => "steps/s × √(leg length / g)".into(),
+        other => other.into(),
+    }
+}
+
 fn mean_sd(p: &StParam) -> String {
-    if p.sd.is_finite() {
+    // No cycle behind the value: blank as in spatiotemporal.csv, not "NaN (n=0)".
+    if p.n == 0 || !p.mean.is_finite() {
+        "—".into()
+    } else if p.sd.is_finite() {
         format!("{:.2} ± {:.2} (n={})", p.mean, p.sd, p.n)
     } else {
         format!("{:.2} (n={})", p.mean, p.n)
@@ -130,16 +144,36 @@ pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side
             Some(n) => match norm_in(&unit, n, leg) {
                 None => format!(
                     "{:.2} ± {:.2} {} (needs a scale to compare: set kinematics.subject_height_m)",
-                    n.mean, n.sd, n.unit
+                    n.mean,
+                    n.sd,
+                    unit_label(&n.unit)
                 ),
                 Some((m, sd)) => {
-                    let ours = [l, r, b].into_iter().flatten().map(|p| p.mean);
-                    let outside = ours.into_iter().any(|v| (v - m).abs() > 2.0 * sd);
-                    let flag = if outside { " — outside ±2 SD" } else { "" };
+                    // Which column is outside, and on which side of the norm.
+                    let outside: Vec<String> = [(name(Side::Left), l), (name(Side::Right), r)]
+                        .into_iter()
+                        .chain([("both".to_string(), b)])
+                        .filter_map(|(who, p)| {
+                            let v = p.filter(|p| p.n > 0)?.mean;
+                            let dir = if v > m + 2.0 * sd {
+                                "above"
+                            } else if v < m - 2.0 * sd {
+                                "below"
+                            } else {
+                                return None;
+                            };
+                            Some(format!("{who} {dir}"))
+                        })
+                        .collect();
+                    let flag = if outside.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" — outside ±2 SD: {}", outside.join(", "))
+                    };
                     let hof = if n.unit == unit {
                         String::new()
                     } else {
-                        format!(" ({:.2} ± {:.2} {})", n.mean, n.sd, n.unit)
+                        format!(" ({:.2} ± {:.2} {})", n.mean, n.sd, unit_label(&n.unit))
                     };
                     format!("{m:.2} ± {sd:.2}{hof}{flag}")
                 }
@@ -223,7 +257,11 @@ mod tests {
         ];
         let t = table(&rows, Some(&norm), Some(Side::Right));
         assert_eq!(t.rows[0][0], "cadence");
-        assert!(t.rows[0][5].contains("outside ±2 SD"), "{:?}", t.rows[0]);
+        assert!(
+            t.rows[0][5].ends_with("outside ±2 SD: both below"),
+            "{:?}",
+            t.rows[0]
+        );
         assert!(
             !t.rows[1][5].contains("outside"),
             "128 cm/s is 1.28 m/s: {:?}",
@@ -233,7 +271,8 @@ mod tests {
         assert!(t.rows[2][5].contains("needs a scale"), "{:?}", t.rows[2]);
         // Hof: 0.76 leg lengths of 250 px = 190 px.
         assert!(
-            t.rows[3][5].starts_with("190.00 ± 10.00 (0.76 ± 0.04 s/L)"),
+            t.rows[3][5]
+                .starts_with("190.00 ± 10.00 (0.76 ± 0.04 leg lengths (step length / leg length))"),
             "{:?}",
             t.rows[3]
         );
@@ -252,5 +291,36 @@ mod tests {
             Some(112.0)
         );
         assert!(t.header[2].contains("intact") && t.header[6].contains("prosthetic vs intact"));
+    }
+
+    #[test]
+    fn no_cycle_is_an_empty_cell_and_the_outside_side_is_named() {
+        let norm = Normative {
+            name: "t".into(),
+            source: String::new(),
+            curves: vec![],
+            params: vec![NormParam {
+                parameter: "speed".into(),
+                mean: 1.3,
+                sd: 0.1,
+                unit: "m/s".into(),
+            }],
+        };
+        let mut none = p("speed", "right", f64::NAN, "cm/s");
+        none.n = 0;
+        none.sd = f64::NAN;
+        let rows = vec![p("speed", "left", 160.0, "cm/s"), none];
+        let t = table(&rows, Some(&norm), None);
+        assert_eq!(t.rows[0][3], "—", "{:?}", t.rows[0]);
+        assert!(
+            !t.rows[0].iter().any(|c| c.contains("NaN")),
+            "{:?}",
+            t.rows[0]
+        );
+        assert!(
+            t.rows[0][5].ends_with("outside ±2 SD: left above"),
+            "{:?}",
+            t.rows[0]
+        );
     }
 }

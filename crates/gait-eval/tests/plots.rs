@@ -188,3 +188,95 @@ fn skeleton_strip_over_frames() {
         .is_err()
     );
 }
+
+/// plotters' SVG with each text element's content on the element's line (`<text ...>100</text>`).
+fn svg_text(fig: &Figure) -> String {
+    fig.svg.replace(">\n", ">").replace("\n</text>", "</text>")
+}
+
+/// `attr="value"` of an SVG element's text, as a number.
+fn attr(element: &str, name: &str) -> f64 {
+    let key = format!("{name}=\"");
+    let start = element.find(&key).unwrap() + key.len();
+    element[start..].split('"').next().unwrap().parse().unwrap()
+}
+
+/// The SVG elements `<tag ...>` (their opening text).
+fn elements<'a>(svg: &'a str, tag: &str) -> Vec<&'a str> {
+    svg.split(&format!("<{tag} "))
+        .skip(1)
+        .map(|e| e.split('>').next().unwrap())
+        .collect()
+}
+
+#[test]
+fn cycle_axes_read_whole_percents_and_keep_the_last_tick_inside() {
+    let ctx = GraphContext {
+        prosthetic: None,
+        normative: None,
+        toe_off: [None, None],
+    };
+    let k = gait_graphs(&curves(0.0), ctx).unwrap();
+    let svg = svg_text(&k);
+    assert!(
+        !svg.contains(">10.0<") && !k.svg.contains(">100.0<"),
+        "percent ticks read 10, not 10.0"
+    );
+    let width = attr(elements(&svg, "svg")[0], "width");
+    let hundreds: Vec<f64> = svg
+        .split("<text ")
+        .filter(|t| t.contains(">100</text>"))
+        .map(|t| attr(t, "x"))
+        .collect();
+    assert_eq!(hundreds.len(), 3, "one 100 tick per panel");
+    // "100" is about 22 px wide at 12 px, centred on its tick.
+    let last = hundreds.iter().cloned().fold(0.0, f64::max);
+    assert!(
+        last + 11.0 <= width,
+        "the 100 tick at {last} is cut by the edge at {width}"
+    );
+}
+
+#[test]
+fn map_legend_is_above_the_bars_and_the_axis_has_four_ticks() {
+    let norm = gait_eval::report_config::ReportConfig::default()
+        .load_normative()
+        .unwrap()
+        .unwrap();
+    let mut high = curves(0.0);
+    for c in &mut high {
+        c.mean.iter_mut().for_each(|v| *v += 30.0);
+    }
+    let scores = gait_eval::Scores::compute(&high, &norm);
+    let map = gait_eval::map_bars(&scores, Some((6.0, "healthy".into()))).unwrap();
+    let svg = svg_text(&map);
+    let rects = elements(&svg, "rect");
+    let bars: Vec<&&str> = rects
+        .iter()
+        .filter(|r| (r.contains("#D62728") || r.contains("#1F77B4")) && attr(r, "width") > 20.0)
+        .collect();
+    assert_eq!(bars.len(), 8, "two bars per group: {rects:?}");
+    let legend = rects
+        .iter()
+        .rfind(|r| r.contains("#FFFFFF") && r.contains("opacity=\"0.8\""))
+        .expect("legend box");
+    let legend_bottom = attr(legend, "y") + attr(legend, "height");
+    let top_of_bars = bars.iter().map(|r| attr(r, "y")).fold(f64::MAX, f64::min);
+    assert!(
+        top_of_bars > legend_bottom,
+        "the legend (to y {legend_bottom}) covers a bar (from y {top_of_bars})"
+    );
+    for g in ["hip", "knee", "ankle", "GPS"] {
+        assert!(svg.contains(&format!(">{g}</text>")), "{g}");
+    }
+    // The tallest bar's group sits in the last quarter: no fifth, empty segment after GPS.
+    let gps_bar = bars
+        .iter()
+        .map(|r| attr(r, "x") + attr(r, "width"))
+        .fold(0.0, f64::max);
+    let plot_right = attr(elements(&svg, "svg")[0], "width") - 10.0;
+    assert!(
+        plot_right - gps_bar < 40.0,
+        "empty space after the GPS bars: {gps_bar} of {plot_right}"
+    );
+}

@@ -115,6 +115,8 @@ pub fn curves(
     warnings: &mut Vec<String>,
 ) -> Vec<CycleCurve> {
     let mut out = Vec::new();
+    // (side, joint, cycles found) of every curve left out: one warning line for all of them.
+    let mut short: Vec<(&str, &str, usize)> = Vec::new();
     for side in Side::BOTH {
         let leg = angles.leg(side);
         for (joint, series) in JOINTS.iter().zip([&leg.hip, &leg.knee, &leg.ankle]) {
@@ -125,12 +127,7 @@ pub fn curves(
                 .collect();
             let n = cycles.len();
             if n < min_cycles.max(1) {
-                warnings.push(format!(
-                    "fewer than {} complete cycles for the {} {} ({n} found): no mean curve",
-                    min_cycles.max(1),
-                    side.name(),
-                    joint
-                ));
+                short.push((side.name(), *joint, n));
                 continue;
             }
             let mean: Vec<f64> = (0..=100)
@@ -153,6 +150,25 @@ pub fn curves(
                 n_cycles: n,
             });
         }
+    }
+    if !short.is_empty() {
+        // Joints of one side with the same count read as one group: "left hip, knee, ankle (1 found)".
+        let mut groups: Vec<(&str, Vec<&str>, usize)> = Vec::new();
+        for (side, joint, n) in short {
+            match groups.last_mut() {
+                Some((s, joints, m)) if *s == side && *m == n => joints.push(joint),
+                _ => groups.push((side, vec![joint], n)),
+            }
+        }
+        let groups: Vec<String> = groups
+            .iter()
+            .map(|(side, joints, n)| format!("{side} {} ({n} found)", joints.join(", ")))
+            .collect();
+        warnings.push(format!(
+            "fewer than {} complete cycles for the {}: no mean curve",
+            min_cycles.max(1),
+            groups.join("; ")
+        ));
     }
     out
 }

@@ -71,7 +71,14 @@ fn real_trial_has_fewer_than_two_cycles_per_side() {
     let seq = gait_core::dlc::read(std::fs::File::open(path).unwrap(), None, 150.0).unwrap();
     let r = check_no_cycles(
         &seq,
-        "fewer than 2 complete cycles for the left knee (1 found)",
+        "fewer than 2 complete cycles for the left hip, knee, ankle (1 found); right hip, knee, ankle (1 found): no mean curve",
+    );
+    let short = r.warnings.iter().filter(|w| w.contains("complete cycles"));
+    assert_eq!(
+        short.count(),
+        1,
+        "one line for all joints: {:?}",
+        r.warnings
     );
     assert_eq!(r.strides.len(), 2);
 }

@@ -18,6 +18,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::PipelineError;
+use crate::config_origin::Origins;
 use crate::one_line;
 use crate::selection::SelectionConfig;
 
@@ -104,9 +105,9 @@ impl PipelineConfig {
     /// Loads `path` (a pipeline TOML, or a previous run's `run.json` to
     /// repeat that run), or the built-in default, then applies `sets`.
     pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Self, PipelineError> {
-        let (origin, mut table) = match path {
+        let (mut origins, mut table) = match path {
             None => (
-                "configs/default.toml (built in)".to_string(),
+                Origins::new("configs/default.toml (built in)"),
                 parse_toml("default", DEFAULT_TOML)?,
             ),
             Some(p) => {
@@ -114,25 +115,30 @@ impl PipelineConfig {
                 let text = std::fs::read_to_string(p).map_err(|e| {
                     PipelineError::config(&origin, format!("cannot read the file ({e})"))
                 })?;
-                let table = if p.extension().is_some_and(|e| e == "json") {
-                    from_run_json(&origin, &text)?
+                if p.extension().is_some_and(|e| e == "json") {
+                    let table = from_run_json(&origin, &text)?;
+                    (Origins::new(origin), table)
                 } else {
-                    parse_toml(&origin, &text)?
-                };
-                (origin, table)
+                    let table = parse_toml(&origin, &text)?;
+                    (Origins::from_toml(origin, &text), table)
+                }
             }
         };
         for set in sets {
-            apply_set(&mut table, set)?;
+            apply_set(&mut table, set, &mut origins)?;
         }
-        Self::from_table(&origin, table)
+        Self::resolve(&origins, table)
     }
 
-    /// Resolves a parsed TOML table.
-    pub fn from_table(origin: &str, mut table: toml::Table) -> Result<Self, PipelineError> {
+    /// Resolves a parsed TOML table; errors name `origin` as the place of every key.
+    pub fn from_table(origin: &str, table: toml::Table) -> Result<Self, PipelineError> {
+        Self::resolve(&Origins::new(origin), table)
+    }
+
+    fn resolve(origins: &Origins, mut table: toml::Table) -> Result<Self, PipelineError> {
         if let Some(bad) = table.keys().find(|k| !TABLES.contains(&k.as_str())) {
             return Err(PipelineError::config(
-                origin,
+                origins.of_table(bad),
                 format!(
                     "unknown table `[{bad}]`; valid tables: {}",
                     TABLES.join(", ")
@@ -146,7 +152,7 @@ impl PipelineConfig {
                 Some(toml::Value::Table(t)) => t,
                 Some(_) => {
                     return Err(PipelineError::config(
-                        origin,
+                        origins.of(name),
                         format!("`{name}` must be a table `[{name}]`"),
                     ));
                 }
@@ -154,71 +160,71 @@ impl PipelineConfig {
             Ok(with_default_kind(given, defaults.get(name)))
         };
         let config = Self {
-            input: table_as(origin, "input", take("input")?)?,
-            run: table_as(origin, "run", take("run")?)?,
-            subject: table_as(origin, "subject", take("subject")?)?,
-            selection: table_as(origin, "selection", take("selection")?)?,
-            edge: table_as(origin, "edge", take("edge")?)?,
-            regenerator: table_as(origin, "regenerator", take("regenerator")?)?,
-            pose: table_as(origin, "pose", take("pose")?)?,
-            postprocess: table_as(origin, "postprocess", take("postprocess")?)?,
-            kinematics: table_as(origin, "kinematics", take("kinematics")?)?,
-            report: table_as(origin, "report", take("report")?)?,
-            export: table_as(origin, "export", take("export")?)?,
+            input: table_as(origins, "input", take("input")?)?,
+            run: table_as(origins, "run", take("run")?)?,
+            subject: table_as(origins, "subject", take("subject")?)?,
+            selection: table_as(origins, "selection", take("selection")?)?,
+            edge: table_as(origins, "edge", take("edge")?)?,
+            regenerator: table_as(origins, "regenerator", take("regenerator")?)?,
+            pose: table_as(origins, "pose", take("pose")?)?,
+            postprocess: table_as(origins, "postprocess", take("postprocess")?)?,
+            kinematics: table_as(origins, "kinematics", take("kinematics")?)?,
+            report: table_as(origins, "report", take("report")?)?,
+            export: table_as(origins, "export", take("export")?)?,
         };
-        config.validate(origin)?;
+        config.validate(origins)?;
         Ok(config)
     }
 
-    fn validate(&self, origin: &str) -> Result<(), PipelineError> {
+    fn validate(&self, origins: &Origins) -> Result<(), PipelineError> {
+        let invalid = |table: &str, message: &str| invalid(origins, table, message);
         if self.run.batch_size == 0 {
-            return Err(PipelineError::config(
-                origin,
-                "[run] batch_size must be at least 1",
-            ));
+            return Err(invalid("run", "batch_size must be at least 1"));
         }
         if let Some(last) = self.input.last_frame
             && last < self.input.first_frame
         {
-            return Err(PipelineError::config(
-                origin,
-                "[input] last_frame is before first_frame",
-            ));
+            let key = if origins.given("input.first_frame") {
+                "first_frame is after last_frame"
+            } else {
+                "last_frame is before first_frame"
+            };
+            return Err(invalid("input", key));
         }
         if self.input.fps.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
-            return Err(PipelineError::config(
-                origin,
-                "[input] fps must be a positive number",
-            ));
+            return Err(invalid("input", "fps must be a positive number"));
         }
         self.subject
             .validate()
-            .map_err(|e| PipelineError::config(origin, format!("[subject] {e}")))?;
+            .map_err(|e| invalid("subject", &e.to_string()))?;
         self.selection
             .validate()
-            .map_err(|e| PipelineError::config(origin, format!("[selection] {e}")))?;
+            .map_err(|e| invalid("selection", &e))?;
         // The frame rate is known only once the input is open; 30 stands in
         // for checks that do not depend on it.
         self.postprocess
             .validate(self.input.fps.unwrap_or(30.0))
-            .map_err(|e| PipelineError::config(origin, format!("[postprocess]: {e}")))?;
+            .map_err(|e| invalid("postprocess", &e.to_string()))?;
         self.kinematics
             .validate()
-            .map_err(|e| PipelineError::config(origin, format!("[kinematics]: {e}")))?;
+            .map_err(|e| invalid("kinematics", &e.to_string()))?;
         // A bad normative file is found before any frame is processed.
         self.report.load_normative().map_err(|e| {
-            PipelineError::config(origin, format!("[report] {}", one_line(&e.to_string())))
+            invalid(
+                "report",
+                &format!("normative: {}", one_line(&e.to_string())),
+            )
         })?;
         if self.regenerator.subject_crop().is_some() && !self.subject.enabled {
-            return Err(PipelineError::config(
-                origin,
-                "[regenerator] region = \"subject\" needs the subject pass; set subject.enabled = true or region = \"frame\"",
+            return Err(invalid(
+                "regenerator",
+                "region = \"subject\" needs the subject pass; set subject.enabled = true or region = \"frame\"",
             ));
         }
         if self.regenerator.needs_edges() && matches!(self.edge, EdgeConfig::None) {
-            return Err(PipelineError::config(
-                origin,
-                "[regenerator] needs an edge map but [edge] kind is \"none\"; set edge.kind (e.g. \"canny\")",
+            return Err(invalid(
+                "regenerator",
+                "kind needs an edge map but [edge] kind is \"none\"; set edge.kind (e.g. \"canny\")",
             ));
         }
         Ok(())
@@ -278,18 +284,78 @@ fn with_default_kind(mut given: toml::Table, default: Option<&toml::Value>) -> t
 }
 
 fn table_as<T: DeserializeOwned>(
-    origin: &str,
+    origins: &Origins,
     name: &str,
     table: toml::Table,
 ) -> Result<T, PipelineError> {
-    T::deserialize(toml::Value::Table(table)).map_err(|e| {
-        PipelineError::config(origin, format!("[{name}]: {}", one_line(&e.to_string())))
+    T::deserialize(toml::Value::Table(table.clone())).map_err(|e| {
+        let message = one_line(&e.to_string());
+        let path = match culprit::<T>(&table, &message) {
+            Some(key) => format!("{name}.{key}"),
+            None => name.to_string(),
+        };
+        // A missing key was not written anywhere: the kind that asks for it was.
+        let at = if origins.given(&path) {
+            origins.of(&path)
+        } else {
+            origins.of(&format!("{name}.kind"))
+        };
+        PipelineError::config(at, format!("{path}: {message}"))
     })
+}
+
+/// The key of `table` that a deserialisation error is about. Serde names it for unknown and
+/// missing fields only; otherwise the table is rebuilt key by key (its kind first) and the
+/// first key whose arrival brings the same error is the one.
+fn culprit<T: DeserializeOwned>(table: &toml::Table, message: &str) -> Option<String> {
+    for named in ["unknown field `", "missing field `"] {
+        if let Some(rest) = message.split(named).nth(1) {
+            return rest.split('`').next().map(str::to_string);
+        }
+    }
+    let mut keys: Vec<&String> = table.keys().collect();
+    keys.sort_by_key(|k| k.as_str() != "kind");
+    let mut part = toml::Table::new();
+    for key in keys {
+        part.insert(key.clone(), table[key].clone());
+        if let Err(e) = T::deserialize(toml::Value::Table(part.clone()))
+            && one_line(&e.to_string()) == message
+        {
+            return Some(key.clone());
+        }
+    }
+    None
+}
+
+/// A config error found after the values were read: `message` starts with the key it is
+/// about (alone, or as `table.key`, possibly after a crate's own prefix), and is reported
+/// as `table.key ...` at the place that key was given.
+fn invalid(origins: &Origins, table: &str, message: &str) -> PipelineError {
+    let prefix = format!("{table}.");
+    let rest = match message.find(&prefix) {
+        Some(at) => &message[at + prefix.len()..],
+        None => message,
+    };
+    let key: String = rest
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+        .collect();
+    let path = format!("{table}.{key}");
+    let at = if origins.given(&path) {
+        origins.of(&path)
+    } else {
+        origins.of_table(table)
+    };
+    PipelineError::config(at, format!("{table}.{rest}"))
 }
 
 /// Applies one `table.key=value` override. The value is read as TOML
 /// (numbers, booleans, arrays, quoted strings); anything else is a string.
-fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), PipelineError> {
+fn apply_set(
+    table: &mut toml::Table,
+    set: &str,
+    origins: &mut Origins,
+) -> Result<(), PipelineError> {
     let origin = format!("--set {set}");
     let (path, raw) = set
         .split_once('=')
@@ -321,6 +387,7 @@ fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), PipelineError> {
         node.clear();
     }
     node.insert(last.to_string(), value);
+    origins.set(&keys.join("."), set);
     Ok(())
 }
 
@@ -346,10 +413,11 @@ mod tests {
 
     fn load_str(text: &str, sets: &[&str]) -> Result<PipelineConfig, PipelineError> {
         let mut t = parse_toml("test", text)?;
+        let mut origins = Origins::from_toml("test", text);
         for s in sets {
-            apply_set(&mut t, s)?;
+            apply_set(&mut t, s, &mut origins)?;
         }
-        PipelineConfig::from_table("test", t)
+        PipelineConfig::resolve(&origins, t)
     }
 
     #[test]
@@ -376,14 +444,14 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("[edge]") && e.contains("sobelx") && e.contains("none"),
+            e.contains("edge.kind") && e.contains("sobelx") && e.contains("none"),
             "{e}"
         );
         let e = load_str("[pose]\nbackend = \"tensorrt\"\n", &[])
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("[pose]")
+            e.contains("test line 2: pose.backend")
                 && e.contains("tensorrt")
                 && e.contains("candle")
                 && e.contains("ort"),
@@ -414,9 +482,50 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("[run]") && e.contains("gpu") && e.contains("cuda:N"),
+            e.contains("run.device") && e.contains("gpu") && e.contains("cuda:N"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn every_error_names_table_key_and_where_the_value_came_from() {
+        let cases: [(&str, &[&str], &str); 6] = [
+            (
+                "",
+                &["pose.backnd=ort"],
+                "--set pose.backnd=ort: pose.backnd: unknown field",
+            ),
+            (
+                "",
+                &["pose.backend=nonsense"],
+                "--set pose.backend=nonsense: pose.backend: unknown variant `nonsense`",
+            ),
+            (
+                "",
+                &["regenerator.kind=controlnet", "regenerator.crop_size=300"],
+                "--set regenerator.crop_size=300: regenerator.crop_size: invalid type: integer `300`",
+            ),
+            (
+                "# study\n[run]\ncache = true\nbatch_size = 0\n",
+                &[],
+                "test line 4: run.batch_size must be at least 1",
+            ),
+            (
+                "[pose]\nbackend = \"ort\"\n\n[input]\nfirst_frame = \"ten\"\n",
+                &[],
+                "test line 5: input.first_frame: invalid type: string \"ten\"",
+            ),
+            (
+                "[input]\nlast_frame = 3\n",
+                &["input.first_frame=5"],
+                "--set input.first_frame=5: input.first_frame is after last_frame",
+            ),
+        ];
+        for (text, sets, expected) in cases {
+            let e = load_str(text, sets).unwrap_err().to_string();
+            assert!(e.contains(expected), "{sets:?}: {e}");
+            assert!(!e.contains("built in"), "{e}");
+        }
     }
 
     #[test]

@@ -22,7 +22,10 @@ pub fn export_edges(
     crate::registry::check_devices(config)?;
     let ctx = StageContext::new(models_dir).on(crate::registry::stage_devices(config)[0]);
     let mut detector = config.edge.build(&ctx)?.ok_or_else(|| {
-        PipelineError::config("[edge]", "kind is \"none\": there are no edge maps to write; set edge.kind (e.g. --set edge.kind=canny)")
+        PipelineError::config(
+            "edge.kind",
+            "\"none\": there are no edge maps to write; set edge.kind (e.g. --set edge.kind=canny)",
+        )
     })?;
     std::fs::create_dir_all(out)
         .map_err(|e| PipelineError::io(format!("creating {}", out.display()), e))?;
@@ -69,7 +72,7 @@ pub fn export_edges(
     if written == 0 {
         return Err(PipelineError::input(
             input,
-            "no frames in the selected range",
+            info.no_frames_in(config.input.first_frame, config.input.last_frame),
         ));
     }
     Ok(written)

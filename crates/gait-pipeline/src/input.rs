@@ -62,6 +62,27 @@ enum Kind {
 }
 
 impl InputInfo {
+    /// Why a frame range gave no frame: the range and, where the container says, the
+    /// frames the input has.
+    pub fn no_frames_in(&self, first: usize, last: Option<usize>) -> String {
+        let range = match last {
+            Some(l) => format!("first_frame = {first}, last_frame = {l}"),
+            None => format!("first_frame = {first}"),
+        };
+        match self.frames {
+            Some(0) => {
+                format!("no frames in the selected range ({range}): the input has no frames")
+            }
+            Some(n) => format!(
+                "no frames in the selected range ({range}): the input has {n} frames (0 to {}); set input.first_frame below {n}",
+                n - 1
+            ),
+            None => format!(
+                "no frames in the selected range ({range}): the input ends before frame {first}"
+            ),
+        }
+    }
+
     /// Inspects `path` without decoding it whole.
     pub fn open(path: &Path) -> Result<Self, PipelineError> {
         if !path.exists() {

@@ -6,6 +6,7 @@ pub use gait_core::atomic;
 mod beside;
 mod cache;
 pub mod config;
+mod config_origin;
 mod driver;
 pub mod edges;
 mod error;

@@ -16,6 +16,11 @@ use crate::selection::SelectionRecord;
 pub struct RunManifest {
     pub tool: &'static str,
     pub version: &'static str,
+    /// "done", or "no_result" when the run completed but found nothing to measure
+    /// (`reason` says what); an interrupted run's run.json says "interrupted".
+    pub status: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
     /// Seconds since the Unix epoch when the run started.
     pub started_unix: u64,
     pub command: Vec<String>,
@@ -37,6 +42,20 @@ pub struct RunManifest {
     pub warnings: Vec<String>,
     /// Summaries added by later steps (kinematics, reports).
     pub extra: BTreeMap<String, serde_json::Value>,
+}
+
+/// Why a completed run has no result to report (no walking bout, no accepted cycle), or None.
+pub fn no_result_reason(kin: &gait_kin::KinResult) -> Option<String> {
+    if kin.bouts.is_empty() {
+        return Some("no walking bout found".into());
+    }
+    let (yes, no) = (&kin.cycles_accepted, &kin.cycles_rejected);
+    (yes.left + yes.right == 0).then(|| {
+        format!(
+            "no complete gait cycle accepted ({} rejected)",
+            no.left + no.right
+        )
+    })
 }
 
 #[derive(Debug, Clone, Serialize)]

@@ -239,7 +239,7 @@ impl Passes<'_> {
         let sel = &self.config.selection;
         let poses: Vec<Pose> = original.iter().map(|(_, p)| p.clone()).collect();
         let verdict = selection::judge(&poses, self.names, sel)
-            .map_err(|e| PipelineError::config("[selection]", e))?;
+            .map_err(|e| PipelineError::config("selection.keypoints", e))?;
         let in_view = |f: usize| self.subject.is_none_or(|s| s.contains_key(&f));
         let mut poor = Vec::new();
         for ((f, _), reason) in original.iter().zip(&verdict.reasons) {

@@ -187,10 +187,7 @@ fn run_from(
     if out.all.is_empty() {
         return Err(PipelineError::input(
             &opts.input,
-            format!(
-                "no frames in the selected range (first_frame = {})",
-                config.input.first_frame
-            ),
+            info.no_frames_in(config.input.first_frame, config.input.last_frame),
         ));
     }
     let (seq, selection) = assemble(config, fps, &names, &out);
@@ -199,6 +196,8 @@ fn run_from(
     let manifest = RunManifest {
         tool: "gait",
         version: env!("CARGO_PKG_VERSION"),
+        status: "done",
+        reason: None,
         started_unix,
         command: opts.command.clone(),
         input: InputRecord {
@@ -459,6 +458,10 @@ fn kinematics(
         "kinematics".into(),
         serde_json::to_value(&kin).unwrap_or_default(),
     );
+    summary.manifest.reason = crate::manifest::no_result_reason(&kin);
+    if summary.manifest.reason.is_some() {
+        summary.manifest.status = "no_result";
+    }
     summary.write_manifest(out)?;
     summary.kinematics = Some(kin);
     Ok(())

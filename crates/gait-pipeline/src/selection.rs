@@ -161,7 +161,7 @@ pub fn judge(
     for k in &config.keypoints {
         watched.push(index(k).ok_or_else(|| {
             format!(
-                "keypoints: the pose model has no keypoint `{k}`; it has {}",
+                "the pose model has no keypoint `{k}`; it has {}",
                 names.join(", ")
             )
         })?);

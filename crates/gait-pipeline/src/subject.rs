@@ -48,10 +48,7 @@ pub(crate) fn find(
     if frames.is_empty() {
         return Err(PipelineError::input(
             &info.path,
-            format!(
-                "no frames in the selected range (first_frame = {})",
-                config.input.first_frame
-            ),
+            info.no_frames_in(config.input.first_frame, config.input.last_frame),
         ));
     }
     let person = config.pose.person();

@@ -14,7 +14,7 @@ use crate::error::{CliError, one_line};
 /// `gait ablate --matrix FILE.toml --out DIR`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Matrix file: [[video]] entries (path, optional truth) and [axes] of config values to combine
+    /// Matrix file: [[video]] entries (path, optional truth) and [axes] of config values to combine (format: docs/ablate.md)
     #[arg(long, value_name = "FILE")]
     matrix: PathBuf,
     /// Folder for one run folder per video and configuration, the shared cache and comparison.csv/.md

@@ -199,19 +199,24 @@ fn submit(args: &Args, study: &Path, out: &Path, models_dir: &Path) -> Result<Ex
     }
 }
 
-/// 0 when every row is done, [`SOME_FAILED`] otherwise.
+/// 0 when every row completed (with a result or none), [`SOME_FAILED`] otherwise.
 fn exit_status(out: &Path, plan: &Plan) -> Result<ExitCode, CliError> {
-    let failed = plan
+    let states: Vec<RowState> = plan
         .rows
         .iter()
-        .filter(|r| {
-            let config = Plan::config(out, r).ok();
-            state::row_state(out, r, config.as_ref()) != RowState::Done
-        })
-        .count();
+        .map(|r| state::row_state(out, r, Plan::config(out, r).ok().as_ref()))
+        .collect();
+    let failed = states.iter().filter(|s| !s.finished()).count();
+    let empty = states.iter().filter(|s| **s == RowState::NoResult).count();
     if failed == 0 {
+        // Empty runs completed, but a study must not take them for results.
+        let empty = if empty > 0 {
+            format!(" ({empty} with no result: `gait batch status` says why)")
+        } else {
+            String::new()
+        };
         eprintln!(
-            "all {} rows done; cohort.csv and cohort.html in {}",
+            "all {} rows done{empty}; cohort.csv and cohort.html in {}",
             plan.rows.len(),
             out.display()
         );
@@ -302,14 +307,21 @@ fn status(out: &Path) -> Result<ExitCode, CliError> {
         let config = Plan::config(out, r).ok();
         let mut st = state::row_state(out, r, config.as_ref());
         let mut detail = state::failure(out, r).unwrap_or_default();
-        if st != RowState::Done
+        if !st.finished()
             && let Some(q) = in_queue(r.index)
         {
             st = RowState::Running;
             detail = format!("slurm: {q}");
         }
-        if st == RowState::Done {
-            detail.clear();
+        match st {
+            RowState::Done => detail.clear(),
+            RowState::NoResult => {
+                detail = format!(
+                    "no result: {}",
+                    state::no_result(out, r).unwrap_or_default()
+                )
+            }
+            _ => {}
         }
         *counts.entry(st.name()).or_insert(0) += 1;
         println!(

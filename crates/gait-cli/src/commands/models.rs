@@ -33,6 +33,9 @@ enum Action {
         /// sd15-controlnet-canny only: branch, tag or commit of --controlnet-repo
         #[arg(long, value_name = "REV", default_value = "main")]
         controlnet_revision: String,
+        /// Fetch again even when the files are present (and, for blazepose, check out right)
+        #[arg(long)]
+        force: bool,
     },
     /// List the models the toolkit knows and whether their files are present
     List,
@@ -66,6 +69,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
             file,
             controlnet_repo,
             controlnet_revision,
+            force,
         } => {
             let files = match hub::defaults(&name, models_dir) {
                 Some(mut repos) => {
@@ -95,7 +99,25 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                         }
                         None => {}
                     }
-                    hub::fetch(&repos, models_dir)
+                    let present: Vec<_> = repos
+                        .iter()
+                        .flat_map(|r| &r.files)
+                        .map(|(_, dest)| dest)
+                        .filter(|d| d.is_file())
+                        .collect();
+                    if !force && !present.is_empty() {
+                        // The Hub's checksums need the network; present files are kept as they are.
+                        eprintln!(
+                            "{name}: {} file(s) already present, kept (--force downloads them again): {}",
+                            present.len(),
+                            present
+                                .iter()
+                                .map(|p| p.display().to_string())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        );
+                    }
+                    hub::fetch(&repos, models_dir, force)
                         .map_err(|e| CliError::new(one_line(&e.to_string())))?
                 }
                 None if repo.is_some()
@@ -108,7 +130,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                         "`{name}` does not come from the Hugging Face Hub: --repo, --revision, --file and the --controlnet-* options do not apply"
                     )));
                 }
-                None => fetch_other(&name, models_dir)?,
+                None => fetch_other(&name, models_dir, force)?,
             };
             for f in files {
                 eprintln!("{}", f.display());
@@ -146,10 +168,30 @@ fn present(name: &str, models_dir: &Path) -> bool {
     }
 }
 
-fn fetch_other(name: &str, models_dir: &Path) -> Result<Vec<std::path::PathBuf>, CliError> {
+fn fetch_other(
+    name: &str,
+    models_dir: &Path,
+    force: bool,
+) -> Result<Vec<std::path::PathBuf>, CliError> {
+    use gait_pose::blazepose::fetch::{Installed, check, fetch};
     match name {
-        "blazepose" => gait_pose::blazepose::fetch::fetch(models_dir)
-            .map_err(|e| CliError::new(one_line(&e.to_string()))),
+        "blazepose" => {
+            if !force {
+                match check(models_dir) {
+                    Installed::Valid(files) => {
+                        eprintln!(
+                            "blazepose: present and checked ({} files in {}); nothing fetched (--force fetches them again)",
+                            files.len(),
+                            models_dir.join("blazepose").display()
+                        );
+                        return Ok(Vec::new());
+                    }
+                    Installed::Invalid(why) => eprintln!("blazepose: {why}; fetching again"),
+                    Installed::Missing => {}
+                }
+            }
+            fetch(models_dir).map_err(|e| CliError::new(one_line(&e.to_string())))
+        }
         other => {
             let known: Vec<&str> = MODELS.iter().map(|(n, _)| *n).collect();
             Err(CliError::new(format!(

@@ -27,9 +27,29 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     if let Some(h) = &opts.handle {
         crate::interrupt::install(h);
     }
-    run_and_report(&config, &opts)
+    let fresh = !opts.out.exists();
+    let result = run_and_report(&config, &opts);
+    if result.is_err() && fresh && !holds_data(&opts.out) {
+        // A folder this run made and left without data only misleads: something ran there.
+        let _ = std::fs::remove_dir_all(&opts.out);
+    }
+    result
 }
 
+/// True when `dir` holds a file other than the description a stage cache writes before its
+/// first frame (`config.json`): frames in the cache are kept for the rerun.
+fn holds_data(dir: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    entries.flatten().any(|e| {
+        if e.file_type().is_ok_and(|t| t.is_dir()) {
+            holds_data(&e.path())
+        } else {
+            e.file_name() != "config.json" || !dir.ancestors().any(|a| a.ends_with("cache"))
+        }
+    })
+}
 /// What `gait run` does once the config is resolved: the run, then the report step, with the
 /// warnings and the closing line on stderr. `gait batch` runs each row through here.
 pub fn run_and_report(config: &PipelineConfig, opts: &RunOptions) -> Result<(), CliError> {
@@ -47,8 +67,9 @@ pub fn run_and_report(config: &PipelineConfig, opts: &RunOptions) -> Result<(), 
     let walked = summary.kinematics.as_ref().map_or(String::new(), |k| {
         let bouts = k.bouts.len();
         let (yes, no) = (&k.cycles_accepted, &k.cycles_rejected);
-        if bouts == 0 {
-            "; no walking bout found, so no cycles".into()
+        if let Some(why) = &summary.manifest.reason {
+            // The run completed (exit 0) but has nothing to measure; run.json says "no_result".
+            format!("; no result: {why}")
         } else {
             format!(
                 "; {bouts} walking bout(s), cycles accepted left {} right {} (rejected {})",

@@ -38,13 +38,15 @@ impl Draw for Map<'_> {
             .flatten()
             .chain(self.reference.as_ref().map(|r| r.0))
             .fold(1.0f64, f64::max)
-            * 1.2;
+            // Room above the tallest bar for the legend (three lines in the upper left).
+            / 0.65;
         let mut chart = ChartBuilder::on(root)
             .caption("Movement Analysis Profile (sagittal)", (FONT, 16))
             .margin(10)
             .x_label_area_size(32)
             .y_label_area_size(48)
-            .build_cartesian_2d((0u32..4u32).into_segmented(), 0f64..top)
+            // Four groups: segments 0..=3 (an integer range includes its end).
+            .build_cartesian_2d((0u32..3u32).into_segmented(), 0f64..top)
             .map_err(err)?;
         chart
             .configure_mesh()

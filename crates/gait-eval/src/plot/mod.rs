@@ -150,12 +150,21 @@ pub(crate) fn cycle_axes<'a, DB: DrawingBackend + 'a>(
     let mut chart = ChartBuilder::on(area)
         .caption(caption, (FONT, 16))
         .margin(8)
+        // The "100" under the right edge needs half its width beyond the axis.
+        .margin_right(16)
         .x_label_area_size(32)
         .y_label_area_size(44)
         .build_cartesian_2d(0f64..100f64, lo..hi)
         .map_err(err)?;
     chart
         .configure_mesh()
+        .x_labels(11)
+        .x_label_formatter(&|x| format!("{x:.0}"))
+        // Whole degrees read as "10", not "10.0"; a finer step keeps its decimal.
+        .y_label_formatter(&|y| {
+            let s = format!("{y:.1}");
+            s.strip_suffix(".0").map_or(s.clone(), str::to_string)
+        })
         .x_desc("% gait cycle")
         .label_style((FONT, 12))
         .axis_desc_style((FONT, 12))

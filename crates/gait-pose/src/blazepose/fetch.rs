@@ -29,6 +29,78 @@ pub const WHEEL_FILES: [(&str, &str); 3] = [
     ),
 ];
 
+/// sha256 of each file of [`WHEEL_FILES`] as the wheel holds it, to check a
+/// models folder without the wheel.
+pub const FILE_SHA256: [(&str, &str); 3] = [
+    (
+        "pose_detection.tflite",
+        "9ba9dd3d42efaaba86b4ff0122b06f29c4122e756b329d89dca1e297fd8f866c",
+    ),
+    (
+        "pose_landmark_full.tflite",
+        "e9a5c5cb17f736fafd4c2ec1da3b3d331d6edbe8a0d32395855aeb2cdfd64b9f",
+    ),
+    (
+        "selfie_segmentation.tflite",
+        "9ee168ec7c8f2a16c56fe8e1cfbc514974cbbb7e434051b455635f1bd1462f5c",
+    ),
+];
+
+/// What a models folder holds of BlazePose.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Installed {
+    /// Every file is there and checked: the `.tflite` files against their
+    /// sha256, the ONNX exports against a fresh export of them.
+    Valid(Vec<PathBuf>),
+    /// No file is there.
+    Missing,
+    /// Some are there, but this one is missing or not what it should be.
+    Invalid(String),
+}
+
+/// Checks the BlazePose files in `<models_dir>/blazepose/` without writing anything.
+pub fn check(models_dir: &Path) -> Installed {
+    let dir = models_dir.join("blazepose");
+    let mut files = Vec::new();
+    for (name, sha) in FILE_SHA256 {
+        let path = dir.join(name);
+        if !path.is_file() {
+            let any = FILE_SHA256.iter().any(|(n, _)| dir.join(n).is_file());
+            return if any {
+                Installed::Invalid(format!("{} is missing", path.display()))
+            } else {
+                Installed::Missing
+            };
+        }
+        match sha256_file(&path) {
+            Ok(got) if got == sha => files.push(path),
+            Ok(got) => {
+                return Installed::Invalid(format!(
+                    "{} has sha256 {got}, expected {sha}",
+                    path.display()
+                ));
+            }
+            Err(e) => return Installed::Invalid(e.to_string()),
+        }
+    }
+    for name in [super::DETECTOR_FILE, super::LANDMARK_FILE] {
+        let src = dir.join(name);
+        let dst = super::net::onnx_path(&src);
+        let same = match (export_bytes(&src), std::fs::read(&dst)) {
+            (Ok(fresh), Ok(on_disk)) => fresh == on_disk,
+            _ => false,
+        };
+        if !same {
+            return Installed::Invalid(format!(
+                "{} is missing or not the export of {name}",
+                dst.display()
+            ));
+        }
+        files.push(dst);
+    }
+    Installed::Valid(files)
+}
+
 /// Why fetching the models failed; each message says what to do.
 #[derive(Debug, thiserror::Error)]
 pub enum FetchError {
@@ -92,17 +164,22 @@ pub fn export_onnx(dir: &Path) -> Result<Vec<PathBuf>, FetchError> {
     let mut out = Vec::new();
     for name in [super::DETECTOR_FILE, super::LANDMARK_FILE] {
         let src = dir.join(name);
-        let fail = |reason: String| FetchError::Export {
-            path: src.clone(),
-            reason,
-        };
-        let graph = super::net::load_graph(&src).map_err(|e| fail(e.to_string()))?;
-        let bytes = gait_tflite::to_onnx(&graph).map_err(fail)?;
+        let bytes = export_bytes(&src)?;
         let dst = super::net::onnx_path(&src);
         std::fs::write(&dst, bytes).map_err(io(format!("writing {}", dst.display())))?;
         out.push(dst);
     }
     Ok(out)
+}
+
+/// The ONNX export of one `.tflite` file.
+fn export_bytes(src: &Path) -> Result<Vec<u8>, FetchError> {
+    let fail = |reason: String| FetchError::Export {
+        path: src.to_path_buf(),
+        reason,
+    };
+    let graph = super::net::load_graph(src).map_err(|e| fail(e.to_string()))?;
+    gait_tflite::to_onnx(&graph).map_err(fail)
 }
 
 fn download(cache: &Path) -> Result<(), FetchError> {
