@@ -20,6 +20,8 @@ python3 tools/robustness/matrix.py --gait target/debug/gait --work target/robust
     --mode quick --hold crf18,noise
 # Faults (issue 32): kills in every step, full disks, Slurm node-down and time-limit events,
 # concurrent writers and corrupt cache entries, each against the undisturbed run (quick mode).
+# A fresh work folder: runs left by an earlier call would make every kill land "after the end".
+rm -rf target/faults
 python3 tools/faults/inject.py --gait target/debug/gait --models "$GAIT_MODELS_DIR" \
     --work target/faults --mode quick
 # The Python package (issue 31): its venv under target/, the wheel, pytest on the API, Python stages
