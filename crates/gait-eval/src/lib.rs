@@ -10,6 +10,7 @@ mod error;
 mod evaluation;
 pub mod export;
 pub mod failure;
+pub mod frontal;
 mod fsutil;
 mod html;
 mod input;

@@ -55,6 +55,7 @@ impl Report {
             r.subject = crate::subject_lines::describe(&v);
             r.manifest = Some(v);
         }
+        r.frontal = crate::frontal::FrontalReport::read(dir, r.manifest.as_ref())?;
         let cycles = dir.join("cycles.csv");
         if cycles.exists() {
             r.cycles = crate::plot::read_cycles_csv(&cycles)?;

@@ -239,7 +239,7 @@ fn run_from(
 fn check_selection(config: &PipelineConfig, names: &[String]) -> Result<(), PipelineError> {
     if config.selection.mode == SelectionMode::Poor {
         selection::judge(&[], names, &config.selection)
-            .map_err(|e| PipelineError::config("[selection]", e))?;
+            .map_err(|e| PipelineError::config("selection.keypoints", e))?;
     }
     Ok(())
 }
