@@ -30,7 +30,12 @@ pub struct FrontalReport {
 
 impl FrontalReport {
     /// The frontal files of `dir`, or `None` for a side view (no frontal_cycles.csv).
-    pub fn read(dir: &Path, manifest: Option<&Value>) -> Result<Option<Self>, EvalError> {
+    /// `sagittal` names the report's sagittal normative set, whose speed stratum is taken.
+    pub fn read(
+        dir: &Path,
+        manifest: Option<&Value>,
+        sagittal: Option<&str>,
+    ) -> Result<Option<Self>, EvalError> {
         let cycles = dir.join("frontal_cycles.csv");
         if !cycles.exists() {
             return Ok(None);
@@ -48,7 +53,7 @@ impl FrontalReport {
             curves: read_curves_csv(&cycles, "measure")?,
             scalars: rows(&dir.join("frontal_scalars.csv"))?,
             feet: rows(&dir.join("frontal_feet.csv"))?,
-            normative: None,
+            normative: crate::normative_frontal::for_sagittal(sagittal),
         }))
     }
 
@@ -121,7 +126,8 @@ impl FrontalReport {
         }
         let header = ["Measure", "Side", "Mean", "SD", "n", "Unit"];
         format!(
-            "<h3>Step width and circumduction</h3><p>Step width: the heels' lateral distance at each heel strike of the side; circumduction: the swing ankle's largest lateral excursion from the line between its heel strikes. Normal walking base 5-10 cm (Northwestern University Prosthetic-Orthotic Center); a wider base is the abducted gait of the amputee checklists. Lengths in cm when kinematics.subject_height_m is set, else in leg lengths.</p>{}",
+            "<h3>Step width and circumduction</h3><p>Step width: the heels' lateral distance at each heel strike of the side; circumduction: the swing ankle's largest lateral excursion from the line between its heel strikes. Normal walking base 5-10 cm (Northwestern University Prosthetic-Orthotic Center); a wider base is the abducted gait of the amputee checklists. {} Lengths in cm when kinematics.subject_height_m is set, else in leg lengths.</p>{}",
+            escape(&crate::normative_frontal::step_width_note()),
             table(&header.map(String::from), &rows)
         )
     }

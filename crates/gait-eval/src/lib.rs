@@ -19,6 +19,7 @@ pub mod kin;
 pub mod names;
 pub mod normative;
 mod normative_data;
+mod normative_frontal;
 pub mod openpose;
 mod options;
 pub mod pdf;
