@@ -19,6 +19,7 @@ TABLES = (
     "cycle_quality",
     "spatiotemporal",
     # A front or back view's (None for a side view).
+    "frontal_view",
     "frontal_angles",
     "frontal_cycles",
     "frontal_scalars",

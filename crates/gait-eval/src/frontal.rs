@@ -41,15 +41,19 @@ impl FrontalReport {
             return Ok(None);
         }
         let view = manifest.and_then(|m| m.pointer("/kinematics/view"));
-        let text = |key: &str| {
+        let from_run = |key: &str| {
             view.and_then(|v| v.get(key))
                 .and_then(Value::as_str)
-                .unwrap_or("")
-                .to_string()
+                .map(str::to_string)
         };
+        // `gait kin` writes no run.json: frontal_view.csv says the same.
+        let file = rows(&dir.join("frontal_view.csv"))?;
+        let from_file = |col: usize| file.first().and_then(|r| r.get(col)).cloned();
         Ok(Some(Self {
-            view: text("view"),
-            how: text("how"),
+            view: from_run("view")
+                .or_else(|| from_file(0))
+                .unwrap_or_default(),
+            how: from_run("how").or_else(|| from_file(2)).unwrap_or_default(),
             curves: read_curves_csv(&cycles, "measure")?,
             scalars: rows(&dir.join("frontal_scalars.csv"))?,
             feet: rows(&dir.join("frontal_feet.csv"))?,
@@ -74,7 +78,10 @@ impl FrontalReport {
                 toe_off: [None, None],
             };
             let norm = match &self.normative {
-                Some(n) => format!("Grey band: normative mean ± 1 SD where the source has the measure ({}); trunk lean has none. ", n.source),
+                Some(n) => format!(
+                    "Grey band: normative mean ± 1 SD where the source has the measure ({}); trunk lean has none. ",
+                    n.source
+                ),
                 None => "No normative band: no redistributable frontal norm is bundled. ".into(),
             };
             let fig = frontal_graphs(&self.curves, ctx)?;
@@ -85,7 +92,15 @@ impl FrontalReport {
         }
         if !self.scalars.is_empty() {
             body.push_str("<h3>Frontal measures per cycle</h3>");
-            let header = ["Measure", "Statistic", "Side", "Mean", "SD", "Cycles", "Unit"];
+            let header = [
+                "Measure",
+                "Statistic",
+                "Side",
+                "Mean",
+                "SD",
+                "Cycles",
+                "Unit",
+            ];
             let rows: Vec<Vec<String>> = self.scalars.iter().map(|r| fmt_row(r, &[3, 4])).collect();
             body.push_str(&table(&header.map(String::from), &rows));
         }
@@ -118,7 +133,11 @@ impl FrontalReport {
                     measure.replace('_', " "),
                     side.into(),
                     format!("{mean:.3}"),
-                    if sd.is_finite() { format!("{sd:.3}") } else { String::new() },
+                    if sd.is_finite() {
+                        format!("{sd:.3}")
+                    } else {
+                        String::new()
+                    },
                     v.len().to_string(),
                     unit.into(),
                 ]);

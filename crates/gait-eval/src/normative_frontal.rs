@@ -12,7 +12,11 @@ macro_rules! stratum {
     ($name:literal) => {
         (
             $name,
-            include_str!(concat!("../data/normative/frontal_schwartz2008_", $name, ".csv")),
+            include_str!(concat!(
+                "../data/normative/frontal_schwartz2008_",
+                $name,
+                ".csv"
+            )),
         )
     };
 }
@@ -115,6 +119,9 @@ mod tests {
             assert!(n.curve("trunk_lean").is_none());
         }
         let note = super::step_width_note();
-        assert!(note.contains("10.00 ± 4.00 cm") && note.contains("18 groups"), "{note}");
+        assert!(
+            note.contains("10.00 ± 4.00 cm") && note.contains("18 groups"),
+            "{note}"
+        );
     }
 }

@@ -287,7 +287,7 @@ fn run_chain(
     let (mut events, event_margins, from_file) = match (&kin.events_csv, &frontal_scale) {
         (Some(p), _) => (events::read_csv(p)?, Vec::new(), true),
         (None, Some(scale)) => {
-            let (ev, margins) = frontal::events::detect(t, view.view, scale, kin.min_stride_s);
+            let (ev, margins) = frontal::events::detect(t, scale, kin.min_stride_s);
             (ev, margins, false)
         }
         (None, None) => {
@@ -327,7 +327,13 @@ fn run_chain(
     let accepted = quality::accepted(&cycle_quality);
     let cycles = match frontal_scale {
         Some(_) => Vec::new(),
-        None => cycles::curves(&angles, t.first_frame, &accepted, kin.min_cycles, &mut warnings),
+        None => cycles::curves(
+            &angles,
+            t.first_frame,
+            &accepted,
+            kin.min_cycles,
+            &mut warnings,
+        ),
     };
     let step_ok = |a: usize, b: usize| {
         !corrections::excluded_overlap(&fixes.exclude, a, b)

@@ -50,7 +50,12 @@ pub fn tables(r: &KinResult) -> Vec<(&'static str, Table)> {
         ("spatiotemporal.csv", spatiotemporal(r)),
     ];
     if let Some(f) = &r.frontal {
-        all.extend(crate::frontal::tables::all(f, r.first_frame, r.fps));
+        all.extend(crate::frontal::tables::all(
+            f,
+            &r.view,
+            r.first_frame,
+            r.fps,
+        ));
     }
     all
 }

@@ -75,8 +75,8 @@ pub struct ViewDecision {
     pub declared: ViewSetting,
     /// One line: declared, or what the keypoints showed.
     pub how: String,
-    /// Share of the frames with both hips seen whose hips lie apart by more than half a thigh.
-    pub hips_apart_share: f64,
+    /// Share of the frames that look frontal (hips or shoulders far apart, see `decide`).
+    pub frontal_share: f64,
     /// Body size (mid-hip to mid-shoulder, else hip to ankle) at the end over the start of the
     /// frames where it is seen, from a fit: above 1 the walker comes nearer.
     pub growth: f64,
@@ -92,7 +92,7 @@ const GROWTH: f64 = 1.15;
 /// Decides the view from gated keypoints (before any label correction), warning where the
 /// keypoints disagree with a declared view; the declared view is analysed either way.
 pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> ViewDecision {
-    let share = hips_apart_share(t);
+    let share = frontal_share(t);
     let growth = growth(t);
     let facing = left_hip_on_image_right(t);
     let frontal_seen = share > FRONTAL_SHARE;
@@ -102,7 +102,7 @@ pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> 
         facing
     };
     let seen = format!(
-        "hips apart in {:.0} % of frames, body size x{growth:.2} over the video",
+        "hips or shoulders apart in {:.0} % of frames; body size x{growth:.2} over the video",
         100.0 * share
     );
     let view = match declared {
@@ -117,7 +117,7 @@ pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> 
                 view,
                 declared,
                 how,
-                hips_apart_share: share,
+                frontal_share: share,
                 growth,
             };
         }
@@ -126,10 +126,17 @@ pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> 
         ViewSetting::Posterior => View::Posterior,
     };
     let disagree = match view {
-        View::Sagittal => frontal_seen.then(|| "the hips lie far apart as in a front or back view".to_string()),
-        _ if !frontal_seen && share.is_finite() => Some("the hips lie close together as in a side view".into()),
-        View::Anterior if toward == Some(false) => Some("the walker moves away from the camera".into()),
-        View::Posterior if toward == Some(true) => Some("the walker comes toward the camera".into()),
+        View::Sagittal => frontal_seen
+            .then(|| "the hips or shoulders lie far apart as in a front or back view".to_string()),
+        _ if !frontal_seen && share.is_finite() => {
+            Some("the hips and shoulders lie close together as in a side view".into())
+        }
+        View::Anterior if toward == Some(false) => {
+            Some("the walker moves away from the camera".into())
+        }
+        View::Posterior if toward == Some(true) => {
+            Some("the walker comes toward the camera".into())
+        }
         _ => None,
     };
     if let Some(why) = disagree {
@@ -142,12 +149,18 @@ pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> 
         view,
         declared,
         how: format!("declared in kinematics.view ({seen})"),
-        hips_apart_share: share,
+        frontal_share: share,
         growth,
     }
 }
 
-fn hips_apart_share(t: &Tracks) -> f64 {
+/// Share of the frames (with both hips and a knee seen) that look frontal: the hips apart by
+/// more than half a thigh, or the shoulders apart by more than half the trunk's length. Seen
+/// from the side both pairs overlap; from the front or back a pose model's hips lie about
+/// 0.3-0.4 thigh lengths apart when it puts them at the joint centres (the Parkinson's trial's
+/// hip joint centres: 14 cm apart over 40 cm thighs), while the shoulders lie 0.7-0.8 trunk
+/// lengths apart.
+fn frontal_share(t: &Tracks) -> f64 {
     let idx = |s, p| t.leg_index(s, p);
     let (Some(lh), Some(rh), Some(lk), Some(rk)) = (
         idx(Side::Left, "hip"),
@@ -157,6 +170,7 @@ fn hips_apart_share(t: &Tracks) -> f64 {
     ) else {
         return f64::NAN;
     };
+    let shoulders = (t.index("left_shoulder"), t.index("right_shoulder"));
     let (mut apart, mut seen) = (0usize, 0usize);
     for i in 0..t.len() {
         let (Some(a), Some(b)) = (t.at(lh, i), t.at(rh, i)) else {
@@ -166,10 +180,22 @@ fn hips_apart_share(t: &Tracks) -> f64 {
             .iter()
             .filter_map(|&(h, k)| Some(dist(h, k?)))
             .fold(0.0, f64::max);
-        if thigh > 0.0 {
-            seen += 1;
-            apart += usize::from((a.0 - b.0).abs() > 0.5 * thigh);
+        if thigh <= 0.0 {
+            continue;
         }
+        seen += 1;
+        let pelvis = ((a.0 + b.0) / 2.0, (a.1 + b.1) / 2.0);
+        let wide_shoulders = match shoulders {
+            (Some(ls), Some(rs)) => match (t.at(ls, i), t.at(rs, i)) {
+                (Some(p), Some(q)) => {
+                    let trunk = dist(pelvis, ((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0));
+                    (p.0 - q.0).abs() > 0.5 * trunk
+                }
+                _ => false,
+            },
+            _ => false,
+        };
+        apart += usize::from((a.0 - b.0).abs() > 0.5 * thigh || wide_shoulders);
     }
     if seen == 0 {
         f64::NAN
@@ -180,7 +206,10 @@ fn hips_apart_share(t: &Tracks) -> f64 {
 
 /// Whether the left hip lies on the image right in most frames (the subject faces the camera).
 fn left_hip_on_image_right(t: &Tracks) -> Option<bool> {
-    let (lh, rh) = (t.leg_index(Side::Left, "hip")?, t.leg_index(Side::Right, "hip")?);
+    let (lh, rh) = (
+        t.leg_index(Side::Left, "hip")?,
+        t.leg_index(Side::Right, "hip")?,
+    );
     let mut d: Vec<f64> = (0..t.len())
         .filter_map(|i| Some(t.at(lh, i)?.0 - t.at(rh, i)?.0))
         .collect();
@@ -196,7 +225,10 @@ pub fn body_size(t: &Tracks, i: usize) -> f64 {
         let (p, q) = (t.at(a?, i)?, t.at(b?, i)?);
         Some(((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0))
     };
-    let hips = mid(t.leg_index(Side::Left, "hip"), t.leg_index(Side::Right, "hip"));
+    let hips = mid(
+        t.leg_index(Side::Left, "hip"),
+        t.leg_index(Side::Right, "hip"),
+    );
     let shoulders = mid(t.index("left_shoulder"), t.index("right_shoulder"));
     if let (Some(h), Some(s)) = (hips, shoulders) {
         return dist(h, s);
@@ -221,14 +253,15 @@ fn growth(t: &Tracks) -> f64 {
         return 1.0;
     }
     let n = pts.len() as f64;
-    let (mx, my) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0 / n, a.1 + p.1 / n));
-    let (sxy, sxx) = pts
+    let (mx, my) = pts
         .iter()
-        .fold((0.0, 0.0), |a, p| (a.0 + (p.0 - mx) * (p.1 - my), a.1 + (p.0 - mx).powi(2)));
+        .fold((0.0, 0.0), |a, p| (a.0 + p.0 / n, a.1 + p.1 / n));
+    let (sxy, sxx) = pts.iter().fold((0.0, 0.0), |a, p| {
+        (a.0 + (p.0 - mx) * (p.1 - my), a.1 + (p.0 - mx).powi(2))
+    });
     if sxx == 0.0 {
         return 1.0;
     }
     let span = pts[pts.len() - 1].0 - pts[0].0;
     (sxy / sxx * span).exp()
 }
-

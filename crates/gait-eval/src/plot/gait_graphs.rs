@@ -169,17 +169,42 @@ impl Draw for MeanGraphs<'_> {
 /// normative band, toe-off lines, legend with cycle counts.
 pub fn gait_graphs(curves: &[CycleCurve], ctx: GraphContext) -> Result<Figure, EvalError> {
     let joints = &JOINTS;
-    render(&MeanGraphs { curves, ctx, joints }, "gait_graphs", 1200, 400, None)
+    render(
+        &MeanGraphs {
+            curves,
+            ctx,
+            joints,
+        },
+        "gait_graphs",
+        1200,
+        400,
+        None,
+    )
 }
 
 /// The frontal measures of a front or back view, as [`gait_graphs`] draws the sagittal joints.
 pub fn frontal_graphs(curves: &[CycleCurve], ctx: GraphContext) -> Result<Figure, EvalError> {
     let joints = &FRONTAL;
-    render(&MeanGraphs { curves, ctx, joints }, "frontal_graphs", 1600, 400, None)
+    render(
+        &MeanGraphs {
+            curves,
+            ctx,
+            joints,
+        },
+        "frontal_graphs",
+        1600,
+        400,
+        None,
+    )
 }
 
 /// The panels of [`frontal_graphs`], named as gait-kin's frontal_cycles.csv names them.
-pub const FRONTAL: [&str; 4] = ["trunk_lean", "pelvic_obliquity", "hip_adduction", "knee_varus"];
+pub const FRONTAL: [&str; 4] = [
+    "trunk_lean",
+    "pelvic_obliquity",
+    "hip_adduction",
+    "knee_varus",
+];
 
 struct AllCycles<'a> {
     traces: &'a [CycleTrace],

@@ -16,7 +16,10 @@ const MIN_RATE: f64 = 0.04;
 /// The bouts of `t` (input frame ranges), walking the way `view` says.
 pub fn find(t: &Tracks, view: View, scale: &Scale, kin: &KinematicsConfig) -> Vec<Bout> {
     if let Some(given) = &kin.bouts {
-        return given.iter().map(|&[first, last]| bout(first, last)).collect();
+        return given
+            .iter()
+            .map(|&[first, last]| bout(first, last))
+            .collect();
     }
     let n = t.len();
     let fps = t.fps;

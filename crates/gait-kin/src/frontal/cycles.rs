@@ -38,19 +38,20 @@ pub struct FootLength {
     pub unit: &'static str,
 }
 
+/// One accepted stride's cycle of each measure of [`MEASURES`], or why it has none.
+pub type StrideCycles = (Stride, [Result<Vec<f64>, &'static str>; 4]);
+
+/// A per-cycle statistic and its name.
+type Statistic = (&'static str, fn(&[f64]) -> f64);
+
 /// Per accepted stride and measure: the resampled cycle, or why there is none.
-pub fn per_cycle(
-    a: &FrontalAngles,
-    first_frame: usize,
-    accepted: &[Stride],
-) -> Vec<(Stride, [Result<Vec<f64>, &'static str>; 4])> {
+pub fn per_cycle(a: &FrontalAngles, first_frame: usize, accepted: &[Stride]) -> Vec<StrideCycles> {
     accepted
         .iter()
         .map(|s| {
             let series = a.side(s.side);
-            let cycles = std::array::from_fn(|k| {
-                resample(&series[k], first_frame, s).ok_or(MISSING[k])
-            });
+            let cycles =
+                std::array::from_fn(|k| resample(&series[k], first_frame, s).ok_or(MISSING[k]));
             (*s, cycles)
         })
         .collect()
@@ -65,10 +66,7 @@ const MISSING: [&str; 4] = [
 ];
 
 /// Mean and SD curves per side and measure over the cycles that have them.
-pub fn curves(
-    cycles: &[(Stride, [Result<Vec<f64>, &'static str>; 4])],
-    min_cycles: usize,
-) -> Vec<CycleCurve> {
+pub fn curves(cycles: &[StrideCycles], min_cycles: usize) -> Vec<CycleCurve> {
     let mut out = Vec::new();
     for side in Side::BOTH {
         for (k, measure) in MEASURES.iter().enumerate() {
@@ -95,12 +93,11 @@ pub fn curves(
 
 /// Peak, trough and range of each measure per cycle, as mean and SD over cycles, per side;
 /// then the difference between the sides' means.
-pub fn scalars(
-    cycles: &[(Stride, [Result<Vec<f64>, &'static str>; 4])],
-    prosthetic: Option<Side>,
-) -> Vec<FrontalScalar> {
-    let stats: [(&str, fn(&[f64]) -> f64); 3] = [
-        ("max", |c| c.iter().copied().fold(f64::NEG_INFINITY, f64::max)),
+pub fn scalars(cycles: &[StrideCycles], prosthetic: Option<Side>) -> Vec<FrontalScalar> {
+    let stats: [Statistic; 3] = [
+        ("max", |c| {
+            c.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        }),
         ("min", |c| c.iter().copied().fold(f64::INFINITY, f64::min)),
         ("range", |c| {
             c.iter().copied().fold(f64::NEG_INFINITY, f64::max)
@@ -127,13 +124,27 @@ pub fn scalars(
             };
             let idx = |s: Side| usize::from(s == Side::Right);
             let diff = means[idx(a)] - means[idx(b)];
-            out.push(row(measure, name, label, diff, f64::NAN, usize::from(diff.is_finite())));
+            out.push(row(
+                measure,
+                name,
+                label,
+                diff,
+                f64::NAN,
+                usize::from(diff.is_finite()),
+            ));
         }
     }
     out
 }
 
-fn row(measure: &str, statistic: &'static str, side: &str, mean: f64, sd: f64, n: usize) -> FrontalScalar {
+fn row(
+    measure: &str,
+    statistic: &'static str,
+    side: &str,
+    mean: f64,
+    sd: f64,
+    n: usize,
+) -> FrontalScalar {
     FrontalScalar {
         measure: measure.into(),
         statistic,
@@ -192,7 +203,12 @@ impl Feet<'_> {
     }
 
     /// Step width at each heel strike `keep` admits: the heels' lateral distance.
-    pub fn step_widths(&self, events: &[Event], keep: &dyn Fn(usize) -> bool, kin: &KinematicsConfig) -> Vec<FootLength> {
+    pub fn step_widths(
+        &self,
+        events: &[Event],
+        keep: &dyn Fn(usize) -> bool,
+        kin: &KinematicsConfig,
+    ) -> Vec<FootLength> {
         let (per_leg, unit) = unit(kin);
         events
             .iter()

@@ -12,7 +12,10 @@ use crate::view::View;
 pub fn fix(t: &mut Tracks, view: View) -> Vec<bool> {
     let n = t.len();
     let mut swapped = vec![false; n];
-    let (Some(lh), Some(rh)) = (t.leg_index(Side::Left, "hip"), t.leg_index(Side::Right, "hip")) else {
+    let (Some(lh), Some(rh)) = (
+        t.leg_index(Side::Left, "hip"),
+        t.leg_index(Side::Right, "hip"),
+    ) else {
         return swapped;
     };
     for (i, s) in swapped.iter_mut().enumerate() {

@@ -164,20 +164,41 @@ mod tests {
     /// to image left leans toward the left; the left knee toward image right is medial.
     #[test]
     fn signs_follow_the_subject_not_the_image() {
-        let f = frame((80.0, 90.0), (120.0, 100.0), (110.0, 130.0), (100.0, 170.0), Some((90.0, 30.0)));
+        let f = frame(
+            (80.0, 90.0),
+            (120.0, 100.0),
+            (110.0, 130.0),
+            (100.0, 170.0),
+            Some((90.0, 30.0)),
+        );
         let l = measure(&f, Side::Left, View::Posterior);
         let r = measure(&f, Side::Right, View::Posterior);
         let hike = 10f64.atan2(40.0).to_degrees();
-        assert!((l[1] - hike).abs() < 1e-9 && (r[1] + hike).abs() < 1e-9, "{l:?} {r:?}");
+        assert!(
+            (l[1] - hike).abs() < 1e-9 && (r[1] + hike).abs() < 1e-9,
+            "{l:?} {r:?}"
+        );
         assert!(l[0] > 0.0 && (l[0] + r[0]).abs() < 1e-9, "{l:?} {r:?}");
         assert!(l[2] > 0.0, "left knee medial of the hip: adduction {l:?}");
         // The shank comes back laterally (ankle left of the knee): valgus.
         assert!(l[3] < 0.0, "{l:?}");
         // Seen from the front the same image is the mirror: the left leg now lies on the image
         // right's side of the body and the same knee offset is lateral.
-        let fl = frame((120.0, 100.0), (80.0, 90.0), (110.0, 130.0), (100.0, 170.0), None);
+        let fl = frame(
+            (120.0, 100.0),
+            (80.0, 90.0),
+            (110.0, 130.0),
+            (100.0, 170.0),
+            None,
+        );
         let a = measure(&fl, Side::Left, View::Anterior);
-        assert!(a[2] > 0.0, "knee at x 110 is medial of the left hip at x 120: {a:?}");
-        assert!(a[0].is_nan() && a[1] < 0.0, "the left hip is lower here: {a:?}");
+        assert!(
+            a[2] > 0.0,
+            "knee at x 110 is medial of the left hip at x 120: {a:?}"
+        );
+        assert!(
+            a[0].is_nan() && a[1] < 0.0,
+            "the left hip is lower here: {a:?}"
+        );
     }
 }

@@ -83,7 +83,8 @@ pub fn measure(
                 .iter()
                 .find(|(s, _)| *s == q.stride())
                 .map(|(_, c)| {
-                    let why: Vec<&str> = c.iter().filter_map(|r| r.as_ref().err().copied()).collect();
+                    let why: Vec<&str> =
+                        c.iter().filter_map(|r| r.as_ref().err().copied()).collect();
                     why.join("; ")
                 })
                 .unwrap_or_default()
@@ -124,6 +125,8 @@ fn axis_x(t: &Tracks, kin: &KinematicsConfig) -> f64 {
     if let Some([w, _]) = kin.frame_size {
         return w as f64 / 2.0;
     }
-    let mut xs: Vec<f64> = (0..t.len()).filter_map(|i| t.pelvis(i).map(|p| p.0)).collect();
+    let mut xs: Vec<f64> = (0..t.len())
+        .filter_map(|i| t.pelvis(i).map(|p| p.0))
+        .collect();
     median(&mut xs)
 }

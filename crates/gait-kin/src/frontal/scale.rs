@@ -78,7 +78,11 @@ fn moving_mean(x: &[f64], half: usize) -> Vec<f64> {
             }
             let lo = i.saturating_sub(half);
             let hi = (i + half + 1).min(x.len());
-            let v: Vec<f64> = x[lo..hi].iter().copied().filter(|v| v.is_finite()).collect();
+            let v: Vec<f64> = x[lo..hi]
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .collect();
             v.iter().sum::<f64>() / v.len() as f64
         })
         .collect()

@@ -1,4 +1,5 @@
-//! The frontal CSV files: frontal_angles.csv (per frame), frontal_cycles.csv (mean curves),
+//! The frontal CSV files: frontal_view.csv (the view and how it was decided),
+//! frontal_angles.csv (per frame), frontal_cycles.csv (mean curves),
 //! frontal_scalars.csv (per-cycle peaks and ranges, the sides' difference) and
 //! frontal_feet.csv (step width per heel strike, circumduction per stride).
 
@@ -7,15 +8,33 @@ use gait_core::table::Table;
 use crate::config::Side;
 use crate::frontal::{FrontalResult, MEASURES};
 use crate::output::{ints, nums, texts};
+use crate::view::ViewDecision;
 
 /// The frontal tables, named by their file.
-pub fn all(f: &FrontalResult, first_frame: usize, fps: f64) -> Vec<(&'static str, Table)> {
+pub fn all(
+    f: &FrontalResult,
+    v: &ViewDecision,
+    first_frame: usize,
+    fps: f64,
+) -> Vec<(&'static str, Table)> {
     vec![
+        ("frontal_view.csv", view(v)),
         ("frontal_angles.csv", angles(f, first_frame, fps)),
         ("frontal_cycles.csv", cycles(f)),
         ("frontal_scalars.csv", scalars(f)),
         ("frontal_feet.csv", feet(f)),
     ]
+}
+
+/// One row: the view analysed and how it was decided (also in run.json, which `gait kin`
+/// does not write).
+fn view(v: &ViewDecision) -> Table {
+    Table::default()
+        .with("view", texts([crate::frontal::view_name(v.view)]))
+        .with("declared", texts([v.declared.name()]))
+        .with("how", texts([&v.how]))
+        .with("frontal_share", nums([v.frontal_share]))
+        .with("growth", nums([v.growth]))
 }
 
 fn angles(f: &FrontalResult, first_frame: usize, fps: f64) -> Table {
