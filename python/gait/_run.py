@@ -18,6 +18,12 @@ TABLES = (
     "cycles_all",
     "cycle_quality",
     "spatiotemporal",
+    # A front or back view's (None for a side view).
+    "frontal_view",
+    "frontal_angles",
+    "frontal_cycles",
+    "frontal_scalars",
+    "frontal_feet",
 )
 
 
@@ -71,7 +77,7 @@ class Run:
         def make():
             tables = None if self._data is None else self._data.get("tables")
             if tables is not None:
-                return columns_frame(tables[name])
+                return columns_frame(tables[name]) if name in tables else None
             return read_csv(self.dir / f"{name}.csv")
 
         return self._table(name, make)

@@ -95,6 +95,10 @@ fn row_config(study: &Study, row: &StudyRow, cache: &Path) -> Result<PipelineCon
             ));
         }
     }
+    // The view column says what the camera saw; a front or back view is analysed as one.
+    if VIEWS.contains(&row.view.trim()) {
+        sets.push(format!("kinematics.view=\"{}\"", row.view.trim()));
+    }
     sets.push(format!("run.cache_dir={:?}", cache.display().to_string()));
     let config = PipelineConfig::load(file.as_deref(), &sets).map_err(|e| {
         e.to_string()

@@ -8,6 +8,12 @@ use crate::{EvalError, Side};
 
 /// Why the gait graphs are empty, in words a clinician can act on.
 fn no_cycles_reason(r: &Report) -> String {
+    if let Some(f) = &r.frontal {
+        return format!(
+            "No sagittal angles: this is a {} view, whose measures are in the Frontal plane section; hip, knee and ankle flexion need a side view.",
+            f.view
+        );
+    }
     let from_run = r
         .warnings
         .iter()

@@ -63,6 +63,8 @@ pub struct Report {
     pub manifest: Option<Value>,
     /// Swapped frames, rejected cycles and anything else to flag.
     pub warnings: Vec<String>,
+    /// A front or back view's frontal measures.
+    pub frontal: Option<crate::frontal::FrontalReport>,
 }
 
 impl Default for Report {
@@ -87,6 +89,7 @@ impl Default for Report {
             tables: vec![],
             manifest: None,
             warnings: vec![],
+            frontal: None,
         }
     }
 }
@@ -170,6 +173,9 @@ impl Report {
                 body.push_str(&format!("<li>{}</li>", escape(w)));
             }
             body.push_str("</ul>");
+        }
+        if let Some(f) = &self.frontal {
+            body.push_str(&f.html(self.prosthetic_side)?);
         }
         body.push_str(&self.gait_sections()?);
         body.push_str(&self.score_section()?);

@@ -55,6 +55,8 @@ impl Report {
             r.subject = crate::subject_lines::describe(&v);
             r.manifest = Some(v);
         }
+        let sagittal_norm = normative.as_ref().map(|n| n.name.as_str());
+        r.frontal = crate::frontal::FrontalReport::read(dir, r.manifest.as_ref(), sagittal_norm)?;
         let cycles = dir.join("cycles.csv");
         if cycles.exists() {
             r.cycles = crate::plot::read_cycles_csv(&cycles)?;

@@ -212,6 +212,9 @@ pub struct KinematicsConfig {
     /// corrections.toml written by a person, a script or `gait review`: swaps, events, excluded
     /// frames, keypoints (format: `gait_kin::corrections`). Read and checked by the analysis.
     pub corrections: Option<PathBuf>,
+    /// What the camera saw: `auto` (decided from the keypoints), `left` or `right` (a side
+    /// view), `anterior` (walking toward the camera) or `posterior` (away); see [`crate::view`].
+    pub view: crate::view::ViewSetting,
 }
 
 impl Default for KinematicsConfig {
@@ -238,6 +241,7 @@ impl Default for KinematicsConfig {
             cycle_max_swapped_share: 0.1,
             cycle_min_leg_px: 100.0,
             corrections: None,
+            view: crate::view::ViewSetting::Auto,
         }
     }
 }

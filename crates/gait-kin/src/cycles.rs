@@ -105,6 +105,25 @@ pub fn each(angles: &Angles, first_frame: usize, strides: &[Stride]) -> Vec<Stri
     out
 }
 
+/// Mean and sample SD (NaN for one cycle) at each of the 101 points of equal-length cycles.
+pub fn mean_sd(cycles: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
+    let n = cycles.len();
+    let len = cycles.first().map_or(0, Vec::len);
+    let mean: Vec<f64> = (0..len)
+        .map(|p| cycles.iter().map(|c| c[p]).sum::<f64>() / n as f64)
+        .collect();
+    let sd = (0..len)
+        .map(|p| {
+            if n < 2 {
+                return f64::NAN;
+            }
+            let ss: f64 = cycles.iter().map(|c| (c[p] - mean[p]).powi(2)).sum();
+            (ss / (n - 1) as f64).sqrt()
+        })
+        .collect();
+    (mean, sd)
+}
+
 /// Mean and sample SD per joint and side over complete strides; a side with fewer than
 /// `min_cycles` complete strides for a joint gets no curve and a warning.
 pub fn curves(
@@ -130,18 +149,7 @@ pub fn curves(
                 short.push((side.name(), *joint, n));
                 continue;
             }
-            let mean: Vec<f64> = (0..=100)
-                .map(|p| cycles.iter().map(|c| c[p]).sum::<f64>() / n as f64)
-                .collect();
-            let sd = (0..=100)
-                .map(|p| {
-                    if n < 2 {
-                        return f64::NAN;
-                    }
-                    let ss: f64 = cycles.iter().map(|c| (c[p] - mean[p]).powi(2)).sum();
-                    (ss / (n - 1) as f64).sqrt()
-                })
-                .collect();
+            let (mean, sd) = mean_sd(&cycles);
             out.push(CycleCurve {
                 side,
                 joint,

@@ -49,6 +49,14 @@ pub struct Directions {
 }
 
 impl Directions {
+    /// No direction in any of `n` frames (a front or back view has none across the image).
+    pub fn unknown(n: usize) -> Self {
+        Self {
+            per_frame: vec![Direction::Unknown; n],
+            frontal: vec![false; n],
+        }
+    }
+
     /// Frames walking right / left / unknown.
     pub fn counts(&self) -> [usize; 3] {
         let mut counts = [0usize; 3];

@@ -31,6 +31,7 @@ pub mod direction;
 pub mod events;
 mod events_csv;
 mod feet;
+pub mod frontal;
 pub mod glitch;
 mod input_check;
 pub mod likelihood;
@@ -47,6 +48,7 @@ pub mod swap;
 #[cfg(test)]
 mod testing;
 pub mod tracks;
+pub mod view;
 
 use std::path::PathBuf;
 
@@ -73,6 +75,7 @@ pub use spatiotemporal::Param;
 pub use spline::GapFiller;
 pub use swap::{ContinuitySwap, SwapCorrector};
 pub use tracks::Tracks;
+pub use view::{View, ViewDecision, ViewSetting};
 
 #[derive(Debug, thiserror::Error)]
 pub enum KinError {
@@ -155,6 +158,11 @@ pub struct KinResult {
     /// The cleaned keypoints on the dense timeline (written as keypoints_filtered.csv).
     #[serde(skip)]
     pub filtered: PoseSequence,
+    /// The view analysed and how it was decided.
+    pub view: ViewDecision,
+    /// A front or back view's measures (its events, bouts and cycle verdicts are the fields
+    /// above; the sagittal angles and curves are empty then).
+    pub frontal: Option<frontal::FrontalResult>,
 }
 
 /// The replaceable steps of [`analyse_with`].
@@ -242,19 +250,29 @@ fn run_chain(
     }
     let no_corrections = Corrections::default();
     let fixes = corr.as_ref().map_or(&no_corrections, |g| &g.corrections);
-    let c = clean(seq, post, steps, fixes, &mut warnings);
+    let view = decide_view(seq, steps, kin, &mut warnings);
+    let c = clean(seq, post, steps, fixes, view.view, &mut warnings);
     let (t, n) = (&c.clean, c.clean.len());
-    let dirs = directions(t, &mut warnings);
+    let frontal_scale = view.view.is_frontal().then(|| frontal::Scale::measure(t));
+    let dirs = match frontal_scale {
+        Some(_) => direction::Directions::unknown(n),
+        None => directions(t, &mut warnings),
+    };
     let angles = angles::compute(t, &dirs.per_frame);
     feet::warn_missing_toes(t, &mut warnings);
 
-    let frames = bouts::Frames {
-        clean: t,
-        gated: &c.gated,
-        dirs: &dirs.per_frame,
-        max_gap: post.max_gap(fps),
+    let bouts = match &frontal_scale {
+        Some(scale) => frontal::bouts::find(t, view.view, scale, kin),
+        None => bouts::find(
+            &bouts::Frames {
+                clean: t,
+                gated: &c.gated,
+                dirs: &dirs.per_frame,
+                max_gap: post.max_gap(fps),
+            },
+            kin,
+        ),
     };
-    let bouts = bouts::find(&frames, kin);
     // Detected events count only where the subject walks; a user's events file says itself
     // where that is, unless bouts are given by hand too.
     let enforce_bouts = kin.events_csv.is_none() || kin.bouts.is_some();
@@ -266,9 +284,13 @@ fn run_chain(
         });
     }
     let event_keypoints = feet::event_keypoints(t, kin, &mut warnings);
-    let (mut events, event_margins, from_file) = match &kin.events_csv {
-        Some(p) => (events::read_csv(p)?, Vec::new(), true),
-        None => {
+    let (mut events, event_margins, from_file) = match (&kin.events_csv, &frontal_scale) {
+        (Some(p), _) => (events::read_csv(p)?, Vec::new(), true),
+        (None, Some(scale)) => {
+            let (ev, margins) = frontal::events::detect(t, scale, kin.min_stride_s);
+            (ev, margins, false)
+        }
+        (None, None) => {
             let (ev, margins) = steps.events.detect_with_margins(t, &dirs.per_frame);
             (ev, margins, false)
         }
@@ -296,26 +318,49 @@ fn run_chain(
         bouts: &bouts,
         enforce_bouts,
         excluded: &fixes.exclude,
+        size: frontal_scale.as_ref().map(|s| &s.size[..]),
     };
     quality::warn_small_subject(t, kin, &mut warnings);
     let cycle_quality = quality::assess(&evidence, &strides, kin);
     warnings.extend(quality::warnings(&cycle_quality, kin));
     let (cycles_accepted, cycles_rejected) = quality::counts(&cycle_quality);
     let accepted = quality::accepted(&cycle_quality);
-    let cycles = cycles::curves(
-        &angles,
-        t.first_frame,
-        &accepted,
-        kin.min_cycles,
-        &mut warnings,
-    );
+    let cycles = match frontal_scale {
+        Some(_) => Vec::new(),
+        None => cycles::curves(
+            &angles,
+            t.first_frame,
+            &accepted,
+            kin.min_cycles,
+            &mut warnings,
+        ),
+    };
     let step_ok = |a: usize, b: usize| {
         !corrections::excluded_overlap(&fixes.exclude, a, b)
             && quality::step_ok(&cycle_quality, &bouts, enforce_bouts, a, b)
     };
-    let spatiotemporal = spatiotemporal::compute(t, &events, &accepted, &step_ok, kin);
-    let px_per_cm = spatiotemporal::px_per_cm(t, kin);
-    if (kin.subject_height_m.is_some() || kin.known_length_px.is_some()) && px_per_cm.is_none() {
+    let mut spatiotemporal = spatiotemporal::compute(t, &events, &accepted, &step_ok, kin);
+    let frontal = frontal_scale.as_ref().map(|scale| {
+        // Lengths along the walk are depth in a front view: only the timing holds.
+        spatiotemporal.retain(spatiotemporal::Param::is_temporal);
+        let found = frontal::Found {
+            view: view.view,
+            scale,
+            events: &events,
+            bouts: &bouts,
+            quality: &cycle_quality,
+            accepted: &accepted,
+        };
+        frontal::measure(t, &found, kin, &mut warnings)
+    });
+    let px_per_cm = match frontal {
+        Some(_) => None,
+        None => spatiotemporal::px_per_cm(t, kin),
+    };
+    if (kin.subject_height_m.is_some() || kin.known_length_px.is_some())
+        && px_per_cm.is_none()
+        && frontal.is_none()
+    {
         warnings.push("no leg length could be measured: lengths stay in pixels".into());
     }
     let counts = dirs.counts();
@@ -347,7 +392,21 @@ fn run_chain(
         corrections: corr.map(|g| g.summary),
         warnings,
         filtered: t.to_sequence(),
+        view,
+        frontal,
     })
+}
+
+/// The view from the gated keypoints, before any label correction (which depends on it).
+fn decide_view(
+    seq: &PoseSequence,
+    steps: &Steps,
+    kin: &KinematicsConfig,
+    warnings: &mut Vec<String>,
+) -> ViewDecision {
+    let mut t = Tracks::from_sequence(seq);
+    steps.gate.apply(&mut t);
+    view::decide(&t, kin.view, warnings)
 }
 
 /// The keypoints after cleaning, plus what the quality rules need from before it.
@@ -371,6 +430,7 @@ fn clean(
     post: &PostprocessConfig,
     steps: &Steps,
     fixes: &Corrections,
+    view: View,
     warnings: &mut Vec<String>,
 ) -> Cleaned {
     let fps = seq.fps;
@@ -394,9 +454,11 @@ fn clean(
 
     // Frames with both legs drawn on one carry no labels and mislead the swap correction; they
     // are part of the label cleaning and go with it.
+    // In a front or back view the legs are apart and the hips say which is which: neither
+    // the collapse rule nor the side view's continuity swap applies.
     let collapsed = match steps.swap {
-        Some(_) => collapse::CollapseRule::default().find(&t),
-        None => vec![false; n],
+        Some(_) if !view.is_frontal() => collapse::CollapseRule::default().find(&t),
+        _ => vec![false; n],
     };
     let collapsed_frames = collapsed.iter().filter(|&&c| c).count();
     if collapsed_frames > 0 {
@@ -405,10 +467,11 @@ fn clean(
             "lower-leg keypoints dropped in {collapsed_frames} frames where both legs were drawn on one"
         ));
     }
-    let mut swapped = steps
-        .swap
-        .map(|s| s.correct(&mut t))
-        .unwrap_or_else(|| vec![false; n]);
+    let mut swapped = match steps.swap {
+        _ if view.is_frontal() => frontal::labels::fix(&mut t, view),
+        Some(s) => s.correct(&mut t),
+        None => vec![false; n],
+    };
     for i in (0..n).filter(|&i| swapped[i]) {
         swap::swap_frame(&mut raw, i);
     }

@@ -23,23 +23,24 @@ fn atomic(
     })
 }
 
-fn ints(values: impl IntoIterator<Item = usize>) -> Column {
+pub(crate) fn ints(values: impl IntoIterator<Item = usize>) -> Column {
     Column::Int(values.into_iter().map(|v| v as i64).collect())
 }
 
-fn nums(values: impl IntoIterator<Item = f64>) -> Column {
+pub(crate) fn nums(values: impl IntoIterator<Item = f64>) -> Column {
     Column::Num(values.into_iter().collect())
 }
 
-fn texts<S: ToString>(values: impl IntoIterator<Item = S>) -> Column {
+pub(crate) fn texts<S: ToString>(values: impl IntoIterator<Item = S>) -> Column {
     Column::Text(values.into_iter().map(|v| v.to_string()).collect())
 }
 
 /// The tables of a result, named by their file: angles.csv, events.csv,
 /// bouts.csv, cycle_quality.csv, cycles.csv, cycles_all.csv (every accepted
-/// cycle) and spatiotemporal.csv.
+/// cycle) and spatiotemporal.csv; a front or back view's also the frontal_*.csv files of
+/// [`crate::frontal::tables`].
 pub fn tables(r: &KinResult) -> Vec<(&'static str, Table)> {
-    vec![
+    let mut all = vec![
         ("angles.csv", angles(r)),
         ("events.csv", events(r)),
         ("bouts.csv", bouts(r)),
@@ -47,7 +48,16 @@ pub fn tables(r: &KinResult) -> Vec<(&'static str, Table)> {
         ("cycles.csv", cycles(r)),
         ("cycles_all.csv", cycles_all(r)),
         ("spatiotemporal.csv", spatiotemporal(r)),
-    ]
+    ];
+    if let Some(f) = &r.frontal {
+        all.extend(crate::frontal::tables::all(
+            f,
+            &r.view,
+            r.first_frame,
+            r.fps,
+        ));
+    }
+    all
 }
 
 fn angles(r: &KinResult) -> Table {
@@ -94,7 +104,7 @@ fn cycle_quality(r: &KinResult) -> Table {
         let names: Vec<&str> = q.reasons.iter().map(|r| r.name()).collect();
         names.join(";")
     });
-    Table::default()
+    let table = Table::default()
         .with("side", texts(q.iter().map(|q| q.side.name())))
         .with("first_frame", ints(q.iter().map(|q| q.first_frame)))
         .with("last_frame", ints(q.iter().map(|q| q.last_frame)))
@@ -117,7 +127,12 @@ fn cycle_quality(r: &KinResult) -> Table {
         .with(
             "bout",
             Column::OptInt(q.iter().map(|q| q.bout.map(|b| b as i64)).collect()),
-        )
+        );
+    // A front or back view says which frontal measures a cycle has no value for, and why.
+    match &r.frontal {
+        Some(f) => table.with("frontal_missing", texts(f.cycle_notes.iter())),
+        None => table,
+    }
 }
 
 /// One row per side, joint and percent of the mean cycle.

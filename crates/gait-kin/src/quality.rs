@@ -154,6 +154,9 @@ pub struct Evidence<'a> {
     pub enforce_bouts: bool,
     /// Input frames a person excluded: a stride overlapping one is rejected.
     pub excluded: &'a [FrameRange],
+    /// Per timeline frame, the body's size in pixels when it changes with the distance to the
+    /// camera (a front or back view): segment lengths are compared in body sizes then.
+    pub size: Option<&'a [f64]>,
 }
 
 /// Whether stride `s` overlaps an excluded range.
@@ -169,8 +172,14 @@ fn leg_points(g: &Tracks, side: Side) -> Vec<usize> {
         .collect()
 }
 
-/// Median thigh and shank lengths over timeline frames `range` of the given sides.
-fn segments(t: &Tracks, sides: &[Side], range: std::ops::RangeInclusive<usize>) -> [f64; 2] {
+/// Median thigh and shank lengths over timeline frames `range` of the given sides, in pixels
+/// or, with `size`, in body sizes of each frame.
+fn segments(
+    t: &Tracks,
+    size: Option<&[f64]>,
+    sides: &[Side],
+    range: std::ops::RangeInclusive<usize>,
+) -> [f64; 2] {
     let mut out = [Vec::new(), Vec::new()];
     for &side in sides {
         let idx = ["hip", "knee", "ankle"].map(|p| t.leg_index(side, p));
@@ -178,12 +187,13 @@ fn segments(t: &Tracks, sides: &[Side], range: std::ops::RangeInclusive<usize>) 
             continue;
         };
         for i in range.clone() {
+            let unit = size.map_or(1.0, |s| s[i]);
             let (hp, kp, ap) = (t.at(h, i), t.at(k, i), t.at(a, i));
             if let (Some(hp), Some(kp)) = (hp, kp) {
-                out[0].push(dist(hp, kp));
+                out[0].push(dist(hp, kp) / unit);
             }
             if let (Some(kp), Some(ap)) = (kp, ap) {
-                out[1].push(dist(kp, ap));
+                out[1].push(dist(kp, ap) / unit);
             }
         }
     }
@@ -233,13 +243,13 @@ pub fn assess(ev: &Evidence, strides: &[Stride], kin: &KinematicsConfig) -> Vec<
         return Vec::new();
     }
     let med = median_stride_s(ev, strides, fps);
-    let whole = segments(t, &Side::BOTH, 0..=n - 1);
+    let whole = segments(t, ev.size, &Side::BOTH, 0..=n - 1);
     let per_bout: Vec<[f64; 2]> = ev
         .bouts
         .iter()
         .map(|b| {
             let a = b.first.saturating_sub(f0).min(n - 1);
-            segments(t, &Side::BOTH, a..=(b.last - f0).min(n - 1))
+            segments(t, ev.size, &Side::BOTH, a..=(b.last - f0).min(n - 1))
         })
         .collect();
     strides
@@ -270,7 +280,11 @@ fn measure(ev: &Evidence, s: &Stride, reference: [f64; 2], median_s: f64) -> Cyc
         .iter()
         .flat_map(|&j| ev.raw_likelihood[j][a..=b].iter().copied())
         .collect();
-    let own = segments(t, &[s.side], a..=b);
+    let own = segments(t, ev.size, &[s.side], a..=b);
+    let px = match ev.size {
+        Some(_) => segments(t, None, &[s.side], a..=b),
+        None => own,
+    };
     let stride_s = (s.end - s.start) as f64 / fps;
     CycleQuality {
         side: s.side,
@@ -284,7 +298,7 @@ fn measure(ev: &Evidence, s: &Stride, reference: [f64; 2], median_s: f64) -> Cyc
         mean_likelihood: lik.iter().sum::<f64>() / lik.len() as f64,
         thigh_ratio: own[0] / reference[0],
         shank_ratio: own[1] / reference[1],
-        leg_px: own[0] + own[1],
+        leg_px: px[0] + px[1],
         swapped_frames: ev.swapped[a..=b].iter().filter(|&&x| x).count(),
         bout: None,
     }

@@ -23,6 +23,16 @@ pub struct Param {
     pub unit: String,
 }
 
+impl Param {
+    /// Whether the row is a timing (stride and step time, stance, cadence and their symmetry),
+    /// not a length or speed measured along the image's x axis.
+    pub fn is_temporal(&self) -> bool {
+        ["stride_time", "step_time", "stance", "cadence"]
+            .iter()
+            .any(|p| self.parameter.contains(p))
+    }
+}
+
 fn stats(v: &[f64]) -> (f64, f64) {
     let n = v.len();
     if n == 0 {

@@ -27,6 +27,11 @@ pub struct CycleCurve {
 
 /// Reads a `cycles.csv` (`side,joint,percent,mean,sd,n_cycles`).
 pub fn read_cycles_csv(path: &Path) -> Result<Vec<CycleCurve>, EvalError> {
+    read_curves_csv(path, "joint")
+}
+
+/// As [`read_cycles_csv`], with the curve's name in column `key` (frontal_cycles.csv: `measure`).
+pub fn read_curves_csv(path: &Path, key: &str) -> Result<Vec<CycleCurve>, EvalError> {
     let mut r = csv::Reader::from_path(path).map_err(|e| EvalError::input(path, e))?;
     let header: Vec<String> = r
         .headers()
@@ -34,7 +39,7 @@ pub fn read_cycles_csv(path: &Path) -> Result<Vec<CycleCurve>, EvalError> {
         .iter()
         .map(str::to_string)
         .collect();
-    let want = ["side", "joint", "percent", "mean", "sd", "n_cycles"];
+    let want = ["side", key, "percent", "mean", "sd", "n_cycles"];
     let cols: Vec<usize> = want
         .iter()
         .map(|w| {

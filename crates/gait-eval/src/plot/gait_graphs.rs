@@ -50,6 +50,10 @@ fn title(joint: &str) -> String {
         "hip" => "Hip flexion (°)".into(),
         "knee" => "Knee flexion (°)".into(),
         "ankle" => "Ankle dorsiflexion (°)".into(),
+        "trunk_lean" => "Trunk lean, toward the side + (°)".into(),
+        "pelvic_obliquity" => "Pelvic obliquity, side up + (°)".into(),
+        "hip_adduction" => "Hip adduction + / abduction − (°)".into(),
+        "knee_varus" => "Knee varus + / valgus − (°)".into(),
         other => other.to_string(),
     }
 }
@@ -109,6 +113,8 @@ fn axes<'a, DB: DrawingBackend>(
 struct MeanGraphs<'a> {
     curves: &'a [CycleCurve],
     ctx: GraphContext<'a>,
+    /// One panel each, left to right.
+    joints: &'a [&'a str],
 }
 
 impl Draw for MeanGraphs<'_> {
@@ -117,7 +123,8 @@ impl Draw for MeanGraphs<'_> {
         root: &DrawingArea<DB, Shift>,
         _: bool,
     ) -> Result<(), String> {
-        for (area, joint) in root.split_evenly((1, 3)).iter().zip(JOINTS) {
+        let panels = root.split_evenly((1, self.joints.len()));
+        for (area, &joint) in panels.iter().zip(self.joints) {
             let curves: Vec<&CycleCurve> = Side::BOTH
                 .iter()
                 .filter_map(|&s| self.curves.iter().find(|c| c.side == s && c.joint == joint))
@@ -161,8 +168,43 @@ impl Draw for MeanGraphs<'_> {
 /// Hip, knee and ankle: left (red) and right (blue) mean ± SD over the
 /// normative band, toe-off lines, legend with cycle counts.
 pub fn gait_graphs(curves: &[CycleCurve], ctx: GraphContext) -> Result<Figure, EvalError> {
-    render(&MeanGraphs { curves, ctx }, "gait_graphs", 1200, 400, None)
+    let joints = &JOINTS;
+    render(
+        &MeanGraphs {
+            curves,
+            ctx,
+            joints,
+        },
+        "gait_graphs",
+        1200,
+        400,
+        None,
+    )
 }
+
+/// The frontal measures of a front or back view, as [`gait_graphs`] draws the sagittal joints.
+pub fn frontal_graphs(curves: &[CycleCurve], ctx: GraphContext) -> Result<Figure, EvalError> {
+    let joints = &FRONTAL;
+    render(
+        &MeanGraphs {
+            curves,
+            ctx,
+            joints,
+        },
+        "frontal_graphs",
+        1600,
+        400,
+        None,
+    )
+}
+
+/// The panels of [`frontal_graphs`], named as gait-kin's frontal_cycles.csv names them.
+pub const FRONTAL: [&str; 4] = [
+    "trunk_lean",
+    "pelvic_obliquity",
+    "hip_adduction",
+    "knee_varus",
+];
 
 struct AllCycles<'a> {
     traces: &'a [CycleTrace],

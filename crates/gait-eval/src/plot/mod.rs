@@ -13,9 +13,9 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-pub use cycles::{CycleCurve, comparison_plot, read_cycles_csv};
+pub use cycles::{CycleCurve, comparison_plot, read_curves_csv, read_cycles_csv};
 pub use failure_bars::{FailureEntry, failure_bars};
-pub use gait_graphs::{GraphContext, consistency_plot, gait_graphs};
+pub use gait_graphs::{FRONTAL, GraphContext, consistency_plot, frontal_graphs, gait_graphs};
 pub use map_bars::map_bars;
 pub use skeleton::{StripOptions, skeleton_strip};
 

@@ -37,6 +37,7 @@ impl Case {
             bouts: &self.bouts,
             enforce_bouts: true,
             excluded: &self.excluded,
+            size: None,
         };
         assess(&ev, strides, kin)
     }

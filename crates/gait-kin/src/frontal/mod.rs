@@ -1,0 +1,132 @@
+//! Front and back views: frontal-plane angles, events, step width and circumduction from a
+//! walk toward (anterior) or away from (posterior) the camera. The view is decided in
+//! [`crate::view`]; this module supplies the parts of the chain that differ from a side view:
+//! the leg labels ([`labels`]), the body's scale per frame ([`scale`]), bouts ([`bouts`]),
+//! events ([`events`]) and the measures ([`measures`], [`cycles`]). Quality control and
+//! strides are the side view's, with segment lengths taken in body sizes.
+
+pub mod bouts;
+pub mod cycles;
+pub mod events;
+pub mod labels;
+pub mod measures;
+pub mod scale;
+pub mod tables;
+
+use serde::Serialize;
+
+use crate::bouts::{Bout, bout_of};
+use crate::config::KinematicsConfig;
+use crate::cycles::{CycleCurve, Stride};
+use crate::events::Event;
+use crate::quality::CycleQuality;
+use crate::tracks::{Tracks, median};
+use crate::view::View;
+pub use cycles::{FootLength, FrontalScalar};
+pub use measures::{FrontalAngles, MEASURES};
+pub use scale::Scale;
+
+/// What a frontal run measured (run.json gets the summary; the per-frame series and curves go
+/// to the frontal CSV files).
+#[derive(Debug, Clone, Serialize)]
+pub struct FrontalResult {
+    pub view: View,
+    /// A straight leg's length over the body size (mid-hip to mid-shoulder).
+    pub leg_per_size: f64,
+    #[serde(skip)]
+    pub angles: FrontalAngles,
+    /// The smoothed body size in pixels per timeline frame.
+    #[serde(skip)]
+    pub size: Vec<f64>,
+    /// Mean curves over the accepted cycles, per side and measure (`joint` = the measure).
+    pub cycles: Vec<CycleCurve>,
+    pub scalars: Vec<FrontalScalar>,
+    /// Step width at each heel strike in a bout, circumduction in each accepted stride.
+    pub feet: Vec<FootLength>,
+    /// Per candidate stride (in the order of cycle_quality): the measures it has no value for
+    /// and why, `; `-separated (empty when complete or rejected).
+    pub cycle_notes: Vec<String>,
+}
+
+/// The inputs of [`measure`] besides the keypoints.
+pub struct Found<'a> {
+    pub view: View,
+    pub scale: &'a Scale,
+    pub events: &'a [Event],
+    pub bouts: &'a [Bout],
+    pub quality: &'a [CycleQuality],
+    pub accepted: &'a [Stride],
+}
+
+/// The frontal measures of the accepted strides of `t`.
+pub fn measure(
+    t: &Tracks,
+    f: &Found,
+    kin: &KinematicsConfig,
+    warnings: &mut Vec<String>,
+) -> FrontalResult {
+    let angles = measures::compute(t, f.view);
+    let per_cycle = cycles::per_cycle(&angles, t.first_frame, f.accepted);
+    let curves = cycles::curves(&per_cycle, kin.min_cycles);
+    if curves.is_empty() {
+        warnings.push(format!(
+            "fewer than {} complete cycles per side in the {} view: no frontal mean curves",
+            kin.min_cycles.max(1),
+            view_name(f.view)
+        ));
+    }
+    let cycle_notes = f
+        .quality
+        .iter()
+        .map(|q| {
+            per_cycle
+                .iter()
+                .find(|(s, _)| *s == q.stride())
+                .map(|(_, c)| {
+                    let why: Vec<&str> =
+                        c.iter().filter_map(|r| r.as_ref().err().copied()).collect();
+                    why.join("; ")
+                })
+                .unwrap_or_default()
+        })
+        .collect();
+    let feet = cycles::Feet {
+        t,
+        view: f.view,
+        scale: f.scale,
+        axis_x: axis_x(t, kin),
+    };
+    let in_bout = |frame: usize| bout_of(f.bouts, frame).is_some();
+    let mut lengths = feet.step_widths(f.events, &in_bout, kin);
+    lengths.extend(feet.circumduction(f.accepted, kin));
+    FrontalResult {
+        view: f.view,
+        leg_per_size: f.scale.leg_per_size,
+        scalars: cycles::scalars(&per_cycle, kin.prosthetic_side),
+        angles,
+        size: f.scale.size.clone(),
+        cycles: curves,
+        feet: lengths,
+        cycle_notes,
+    }
+}
+
+pub fn view_name(v: View) -> &'static str {
+    match v {
+        View::Anterior => "anterior",
+        View::Posterior => "posterior",
+        View::Sagittal => "sagittal",
+    }
+}
+
+/// The camera's axis in the image: the frame's middle when its size is known, else where the
+/// walker's pelvis mostly is (a frontal walk is filmed along the walking line).
+fn axis_x(t: &Tracks, kin: &KinematicsConfig) -> f64 {
+    if let Some([w, _]) = kin.frame_size {
+        return w as f64 / 2.0;
+    }
+    let mut xs: Vec<f64> = (0..t.len())
+        .filter_map(|i| t.pelvis(i).map(|p| p.0))
+        .collect();
+    median(&mut xs)
+}

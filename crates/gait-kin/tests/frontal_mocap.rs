@@ -1,0 +1,480 @@
+//! Front and back views on real motion capture projected through a pinhole camera (issue 38):
+//! tests/data/frontal/<trial>_<view>, made by tools/frontal/derive_frontal.py from the Fukuchi
+//! 2018 healthy trial and the gaitkit Parkinson's trial. The script also computes the frontal
+//! angles in 3-D (markers projected orthographically onto the lab's frontal plane), the step
+//! width at each annotated heel strike and the circumduction of each stride; gait-kin sees only
+//! the perspective image and must come close:
+//! - trunk lean and pelvic obliquity within 1.5 deg MAE, hip adduction within 3 deg;
+//! - step width within 2 cm of the heels' 3-D distance;
+//! - heel strikes within 5 frames (150 Hz: one frame of a 30 fps video) of the annotated ones,
+//!   where the annotation marks the contact (see below), and of the side view's heel strikes
+//!   on the same trial (tests/data/fukuchi2018, tests/data/gaitkit_pd), none missed;
+//! - the view decided from the keypoints, and the sides right in both views.
+//!
+//! Figures are printed (`cargo test -p gait-kin --test frontal_mocap -- --nocapture`).
+
+use std::path::PathBuf;
+
+use gait_core::PoseSequence;
+use gait_kin::{
+    EventKind, KinResult, KinematicsConfig, PostprocessConfig, Side, View, analyse,
+    spatiotemporal::LEG_PER_HEIGHT,
+};
+
+const TRIALS: [&str; 2] = ["fukuchi2018", "gaitkit_pd"];
+const VIEWS: [&str; 2] = ["anterior", "posterior"];
+const FPS: f64 = 150.0;
+/// Heel strikes within this many 150 Hz frames of the annotation (33 ms).
+const HS_FRAMES: i64 = 5;
+
+/// Annotated heel strikes that do not mark the heel's contact, with the window (detected -
+/// annotated, frames) they are held to instead. Fukuchi's left 177 and 340 lie 14-16 frames
+/// after the heel's kinematic contact (tests/data/fukuchi2018/README.md); the Parkinson's
+/// walker's left heel reaches the floor still moving forward, so a rule that waits for it to
+/// stop finds it up to 0.11 s late, as the side view's does (tests/data/gaitkit_pd/README.md,
+/// crates/gait-kin/tests/independent_mocap.rs).
+const NOT_AT_CONTACT: [(&str, &str, usize, [i64; 2]); 5] = [
+    ("fukuchi2018", "left", 177, [-16, HS_FRAMES]),
+    ("fukuchi2018", "left", 340, [-16, HS_FRAMES]),
+    ("gaitkit_pd", "left", 200, [0, 16]),
+    ("gaitkit_pd", "left", 395, [0, 16]),
+    ("gaitkit_pd", "left", 581, [0, 16]),
+];
+/// Annotations this close to either end of the trial are not required: a heel strike needs the
+/// swing before it in view (Fukuchi's left 13 is 0.09 s from the start).
+const EDGE_FRAMES: usize = 15;
+
+struct Case {
+    dir: PathBuf,
+}
+
+impl Case {
+    fn new(trial: &str, view: &str) -> Self {
+        Self::at(
+            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../../tests/data/frontal")
+                .join(format!("{trial}_{view}")),
+        )
+    }
+
+    fn at(dir: PathBuf) -> Self {
+        Self { dir }
+    }
+
+    fn name(&self) -> String {
+        self.dir.file_name().unwrap().to_string_lossy().into_owned()
+    }
+
+    fn sequence(&self) -> PoseSequence {
+        let f = std::fs::File::open(self.dir.join("keypoints.csv")).expect("keypoints.csv");
+        gait_core::dlc::read(f, None, FPS).expect("DeepLabCut CSV")
+    }
+
+    fn rows(&self, name: &str) -> (Vec<String>, Vec<Vec<String>>) {
+        let text = std::fs::read_to_string(self.dir.join(name)).expect("csv");
+        let mut lines = text.lines();
+        let header = lines
+            .next()
+            .expect("header")
+            .split(',')
+            .map(String::from)
+            .collect();
+        let rows = lines
+            .map(|l| l.split(',').map(String::from).collect())
+            .collect();
+        (header, rows)
+    }
+
+    fn column(&self, file: &str, column: &str) -> Vec<f64> {
+        let (h, rows) = self.rows(file);
+        let c = h.iter().position(|x| x == column).expect("column");
+        rows.iter()
+            .map(|r| r[c].parse().unwrap_or(f64::NAN))
+            .collect()
+    }
+
+    fn leg_length_cm(&self) -> f64 {
+        let text = std::fs::read_to_string(self.dir.join("subject.json")).expect("subject.json");
+        let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+        v["leg_length_cm"].as_f64().expect("leg_length_cm")
+    }
+
+    /// The analysis with the view left to `auto` and the scale from the subject's leg length.
+    fn analyse(&self) -> KinResult {
+        let kin = KinematicsConfig {
+            subject_height_m: Some(self.leg_length_cm() / 100.0 / LEG_PER_HEIGHT),
+            ..KinematicsConfig::default()
+        };
+        analyse(&self.sequence(), &PostprocessConfig::default(), &kin).expect("analysis")
+    }
+}
+
+/// Mean absolute difference between gait-kin's frontal angle and the 3-D reference over the
+/// frames of the accepted cycles of that side.
+fn angle_mae(case: &Case, r: &KinResult, measure: usize, column: &str, side: Side) -> f64 {
+    let f = r.frontal.as_ref().expect("frontal result");
+    let ours = &f.angles.side(side)[measure];
+    let frames = case.column("reference.csv", "frame");
+    let reference = case.column("reference.csv", &format!("{column}_{}", side.name()));
+    let mut errs = Vec::new();
+    for q in r
+        .cycle_quality
+        .iter()
+        .filter(|q| q.accepted && q.side == side)
+    {
+        for (fr, refv) in frames.iter().zip(&reference) {
+            let fr = *fr as usize;
+            if fr < q.first_frame || fr > q.last_frame {
+                continue;
+            }
+            let v = ours[fr - r.first_frame];
+            if v.is_finite() && refv.is_finite() {
+                errs.push((v - refv).abs());
+            }
+        }
+    }
+    assert!(
+        !errs.is_empty(),
+        "{}: no frames compared for {column}",
+        case.name()
+    );
+    errs.iter().sum::<f64>() / errs.len() as f64
+}
+
+/// Per annotated heel strike away from the trial's ends: (side, frame, detected - annotated of
+/// the nearest detection of that side) and whether it lies in the allowed window.
+fn heel_strike_errors(trial: &str, case: &Case, r: &KinResult) -> Vec<(Side, usize, i64, bool)> {
+    let (_, rows) = case.rows("events.csv");
+    let mut out = Vec::new();
+    for row in rows.iter().filter(|r| r[1] == "heel_strike") {
+        let side = if row[0] == "left" {
+            Side::Left
+        } else {
+            Side::Right
+        };
+        let frame: usize = row[2].parse().expect("frame");
+        if frame < r.first_frame + EDGE_FRAMES || frame + EDGE_FRAMES > r.first_frame + r.n_frames {
+            continue;
+        }
+        let window = NOT_AT_CONTACT
+            .iter()
+            .find(|n| n.0 == trial && n.1 == row[0] && n.2 == frame)
+            .map_or([-HS_FRAMES, HS_FRAMES], |n| n.3);
+        let d = nearest(r, side, frame).unwrap_or(i64::MAX);
+        out.push((side, frame, d, (window[0]..=window[1]).contains(&d)));
+    }
+    out
+}
+
+/// Detected - `frame` for the nearest heel strike of `side`.
+fn nearest(r: &KinResult, side: Side, frame: usize) -> Option<i64> {
+    r.events
+        .iter()
+        .filter(|e| e.side == side && e.event == EventKind::HeelStrike)
+        .map(|e| e.frame as i64 - frame as i64)
+        .min_by_key(|d| d.abs())
+}
+
+/// The frontal run's heel strikes against the side view's of the same trial (the sagittal
+/// fixture, analysed with the defaults): per side-view heel strike, the nearest frontal one.
+fn against_side_view(trial: &str, r: &KinResult) -> Vec<(Side, usize, i64)> {
+    let side_view = Case::at(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tests/data")
+            .join(trial),
+    );
+    let s = analyse(
+        &side_view.sequence(),
+        &PostprocessConfig::default(),
+        &KinematicsConfig::default(),
+    )
+    .expect("side view");
+    s.events
+        .iter()
+        .filter(|e| e.event == EventKind::HeelStrike)
+        .map(|e| {
+            (
+                e.side,
+                e.frame,
+                nearest(r, e.side, e.frame).unwrap_or(i64::MAX),
+            )
+        })
+        .collect()
+}
+
+/// Step width at each detected heel strike against the 3-D width at the nearest annotated
+/// heel strike of the same side (within 5 frames).
+fn step_width_errors(case: &Case, r: &KinResult) -> Vec<f64> {
+    let (_, rows) = case.rows("steps.csv");
+    let f = r.frontal.as_ref().expect("frontal");
+    let mut errs = Vec::new();
+    for w in f.feet.iter().filter(|l| l.measure == "step_width") {
+        let near = rows
+            .iter()
+            .filter(|row| row[0] == w.side.name())
+            .map(|row| {
+                (
+                    row[1].parse::<i64>().unwrap(),
+                    row[2].parse::<f64>().unwrap(),
+                )
+            })
+            .filter(|(fr, _)| (fr - w.first_frame as i64).abs() <= HS_FRAMES)
+            .min_by_key(|(fr, _)| (fr - w.first_frame as i64).abs());
+        if let Some((_, cm)) = near {
+            assert_eq!(w.unit, "cm");
+            errs.push(w.value - cm);
+        }
+    }
+    errs
+}
+
+#[test]
+fn frontal_views_of_real_mocap_match_the_3d_measures() {
+    for trial in TRIALS {
+        for view in VIEWS {
+            let case = Case::new(trial, view);
+            let r = case.analyse();
+            let name = case.name();
+            let expected = if view == "anterior" {
+                View::Anterior
+            } else {
+                View::Posterior
+            };
+            assert_eq!(r.view.view, expected, "{name}: {}", r.view.how);
+            let hs = heel_strike_errors(trial, &case, &r);
+            let side_view = against_side_view(trial, &r);
+            let widths = step_width_errors(&case, &r);
+            let mut maes = Vec::new();
+            for side in Side::BOTH {
+                for (k, column, limit) in [
+                    (0, "trunk_lean", 1.5),
+                    (1, "pelvic_obliquity", 1.5),
+                    (2, "hip_adduction", 3.0),
+                ] {
+                    // The Fukuchi trial has no shoulder markers (tests/data/frontal/README.md).
+                    if !case
+                        .rows("reference.csv")
+                        .0
+                        .iter()
+                        .any(|h| h.starts_with(column))
+                    {
+                        continue;
+                    }
+                    let mae = angle_mae(&case, &r, k, column, side);
+                    maes.push((side.name(), column, mae, limit));
+                }
+            }
+            println!(
+                "{name}: view {:?} ({}); cycles accepted {:?}; heel strikes against the annotations (side, frame, error, ok) {hs:?}; against the side view {side_view:?}; step width errors (cm) {:?}; MAE {:?}",
+                r.view.view,
+                r.view.how,
+                r.cycles_accepted,
+                widths
+                    .iter()
+                    .map(|e| (e * 10.0).round() / 10.0)
+                    .collect::<Vec<_>>(),
+                maes.iter()
+                    .map(|m| (m.0, m.1, (m.2 * 100.0).round() / 100.0))
+                    .collect::<Vec<_>>()
+            );
+            assert!(hs.iter().all(|h| h.3), "{name}: heel strikes {hs:?}");
+            assert!(
+                side_view.iter().all(|h| h.2.abs() <= HS_FRAMES),
+                "{name}: against the side view {side_view:?}"
+            );
+            assert!(!widths.is_empty(), "{name}: no step width compared");
+            assert!(
+                widths.iter().all(|e| e.abs() <= 2.0),
+                "{name}: step widths {widths:?}"
+            );
+            for (side, column, mae, limit) in maes {
+                assert!(
+                    mae <= limit,
+                    "{name} {side} {column}: MAE {mae:.2} > {limit}"
+                );
+            }
+        }
+    }
+}
+
+/// BlazePose's jitter on the bundled sample, measured on its walker's clean stretch (frames
+/// 127-158 of tests/data/sample-blazepose, second differences / sqrt 6): 1.9-2.3 px at the
+/// hips and 1.1 px at the shoulders with legs (thigh + shank) of 193 px, i.e. about 1 px per
+/// 100 px of leg; knees and feet show more, but their second differences hold real motion
+/// too. The noisy runs take 1.5 px per 100 px of leg at each keypoint, frame by frame.
+const NOISE_PER_100_LEG_PX: f64 = 1.0;
+
+/// Deterministic xorshift normals (Box-Muller).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn normal(&mut self) -> f64 {
+        let u = (self.next() >> 11) as f64 / (1u64 << 53) as f64 + 1e-12;
+        let v = (self.next() >> 11) as f64 / (1u64 << 53) as f64;
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+/// The 150 Hz trial seen as a 30 fps video (every 5th frame, numbered 0, 1, ...) with
+/// pose-model jitter added.
+fn as_video(seq: &PoseSequence, seed: u64) -> PoseSequence {
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0xD1B5_4A32_D192_ED03));
+    let mut out = seq.clone();
+    out.poses = seq.poses.iter().step_by(5).cloned().collect();
+    out.frames = (0..out.poses.len()).collect();
+    out.fps = FPS / 5.0;
+    let idx = |n: &str| seq.names.iter().position(|m| m == n).expect(n);
+    let [h, k, a] = ["left_hip", "left_knee", "left_ankle"].map(idx);
+    for pose in &mut out.poses {
+        let kp = &pose.keypoints;
+        let d = |i: usize, j: usize| (kp[i].x - kp[j].x).hypot(kp[i].y - kp[j].y);
+        let leg = d(h, k) + d(k, a);
+        let sigma = NOISE_PER_100_LEG_PX * leg / 100.0;
+        for p in &mut pose.keypoints {
+            p.x += sigma * rng.normal();
+            p.y += sigma * rng.normal();
+        }
+    }
+    out
+}
+
+/// The same figures on the trials as 30 fps videos with BlazePose-like jitter, 10 seeds each:
+/// heel strikes within one video frame (33 ms) of the side view's and the frontal angles within
+/// the targets. Measured (printed as SUMMARY): they hold in 9 of 10 seeds on the healthy walk
+/// toward the camera, but not away from it (heel strikes 4 frames early: the heel, lowered
+/// while it moves away, looks still in the image before contact once jitter raises the still
+/// limit) nor on the Parkinson's walker (pelvic obliquity MAE about 2 deg: its hip joint
+/// centres lie 14 cm apart, 40 px at 5 m). Asserted: every seed's view decided right, and the
+/// healthy anterior walk's figures in at least 9 of 10 seeds.
+#[test]
+fn frontal_figures_hold_under_pose_model_noise() {
+    let mut summary = Vec::new();
+    for trial in TRIALS {
+        let side_view = Case::at(
+            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../../tests/data")
+                .join(trial),
+        );
+        let sagittal = analyse(
+            &side_view.sequence(),
+            &PostprocessConfig::default(),
+            &KinematicsConfig::default(),
+        )
+        .expect("side view");
+        for view in VIEWS {
+            let case = Case::new(trial, view);
+            let name = case.name();
+            let kin = KinematicsConfig {
+                subject_height_m: Some(case.leg_length_cm() / 100.0 / LEG_PER_HEIGHT),
+                ..KinematicsConfig::default()
+            };
+            let seq = case.sequence();
+            let mut held = 0;
+            for seed in 1..=10u64 {
+                let noisy = as_video(&seq, seed);
+                let r = analyse(&noisy, &PostprocessConfig::default(), &kin).expect("analysis");
+                let mut problems = Vec::new();
+                for e in sagittal
+                    .events
+                    .iter()
+                    .filter(|e| e.event == EventKind::HeelStrike)
+                {
+                    // A side-view heel strike at 150 Hz frame f falls in video frame round(f / 5).
+                    let want = (e.frame as f64 / 5.0).round();
+                    let got = r
+                        .events
+                        .iter()
+                        .filter(|g| g.side == e.side && g.event == EventKind::HeelStrike)
+                        .map(|g| g.frame as f64 - want)
+                        .min_by(|a, b| a.abs().total_cmp(&b.abs()));
+                    if !got.is_some_and(|d| d.abs() <= 1.0) {
+                        problems.push(format!(
+                            "{} heel strike {} off by {got:?} frames",
+                            e.side.name(),
+                            e.frame
+                        ));
+                    }
+                }
+                let maes = noisy_maes(&case, &r);
+                for (what, mae, limit) in &maes {
+                    if mae > limit {
+                        problems.push(format!("{what} MAE {mae:.2}"));
+                    }
+                }
+                println!(
+                    "{name} seed {seed}: view {:?}, cycles {:?}, MAE {:?} {problems:?}",
+                    r.view.view,
+                    r.cycles_accepted,
+                    maes.iter()
+                        .map(|m| (m.0.clone(), (m.1 * 100.0).round() / 100.0))
+                        .collect::<Vec<_>>()
+                );
+                let expected = if view == "anterior" {
+                    View::Anterior
+                } else {
+                    View::Posterior
+                };
+                assert_eq!(r.view.view, expected, "{name} seed {seed}: {}", r.view.how);
+                held += usize::from(problems.is_empty());
+            }
+            println!("SUMMARY {name}: the figures held in {held} of 10 seeds");
+            summary.push((name, held));
+        }
+    }
+    assert!(
+        summary
+            .iter()
+            .any(|(name, held)| name == "fukuchi2018_anterior" && *held >= 9),
+        "{summary:?}"
+    );
+}
+
+/// MAE per side and measure over the frames of the accepted cycles, for a 30 fps run whose
+/// frame k is the trial's frame 5k.
+fn noisy_maes(case: &Case, r: &KinResult) -> Vec<(String, f64, f64)> {
+    let f = r.frontal.as_ref().expect("frontal");
+    let frames = case.column("reference.csv", "frame");
+    let mut out = Vec::new();
+    for side in Side::BOTH {
+        for (k, column, limit) in [
+            (0, "trunk_lean", 1.5),
+            (1, "pelvic_obliquity", 1.5),
+            (2, "hip_adduction", 3.0),
+        ] {
+            let header = case.rows("reference.csv").0;
+            let name = format!("{column}_{}", side.name());
+            if !header.contains(&name) {
+                continue;
+            }
+            let reference = case.column("reference.csv", &name);
+            let mut errs = Vec::new();
+            for q in r
+                .cycle_quality
+                .iter()
+                .filter(|q| q.accepted && q.side == side)
+            {
+                for i in q.first_frame..=q.last_frame {
+                    let Some(row) = frames.iter().position(|&fr| fr as usize == 5 * i) else {
+                        continue;
+                    };
+                    let v = f.angles.side(side)[k][i - r.first_frame];
+                    if v.is_finite() {
+                        errs.push((v - reference[row]).abs());
+                    }
+                }
+            }
+            let mae = if errs.is_empty() {
+                f64::INFINITY
+            } else {
+                errs.iter().sum::<f64>() / errs.len() as f64
+            };
+            out.push((name, mae, limit));
+        }
+    }
+    out
+}
