@@ -106,7 +106,11 @@ impl FrontalReport {
             Some(_) => format!("{} (intact)", s.as_str()),
             None => s.as_str().to_string(),
         };
-        let diff_label = if prosthetic.is_some() { "Prosthetic − intact" } else { "Left − right" };
+        let diff_label = if prosthetic.is_some() {
+            "Prosthetic − intact"
+        } else {
+            "Left − right"
+        };
         let cell = |measure: &str, stat: &str, side: &str| {
             self.scalars
                 .iter()
