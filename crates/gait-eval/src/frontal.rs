@@ -12,6 +12,11 @@ use crate::plot::{CycleCurve, GraphContext, frontal_graphs, read_curves_csv};
 use crate::report::figure;
 use crate::{EvalError, Side};
 
+/// The frontal normative bands that go with a sagittal set (its speed stratum).
+pub fn norms(sagittal: Option<&str>) -> Option<Normative> {
+    crate::normative_frontal::for_sagittal(sagittal)
+}
+
 /// What the frontal section shows, read from a run folder's frontal_*.csv files.
 #[derive(Debug, Clone, Default)]
 pub struct FrontalReport {
