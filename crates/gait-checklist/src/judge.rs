@@ -51,6 +51,7 @@ pub fn judge(item: Item, side: Side, samples: &[Sample], t: Threshold, unit: &st
         spread,
         unit: unit.into(),
         threshold: t.value,
+        threshold_unit: unit.into(),
         beyond: t.beyond,
         source: t.source,
         cycles: hits.iter().map(|s| s.first).collect(),

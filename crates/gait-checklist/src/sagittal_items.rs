@@ -69,7 +69,8 @@ fn symmetry(run: &RunFiles, item: Item, parameter: &str, cfg: &ChecklistConfig) 
         v.spread = own.sd;
         v.unit = own.unit.clone();
         v.threshold = cfg.symmetry_pct;
-        v.source = format!("checklist.symmetry_pct (symmetry index here {si:.1} %)");
+        v.threshold_unit = "%".into();
+        v.source = format!("checklist.symmetry_pct, on the symmetry index (here {si:.1} %)");
         v.reason.clear();
         v
     })

@@ -50,6 +50,8 @@ pub struct Verdict {
     /// The unit of value, spread and threshold (the item's, or leg lengths without a scale).
     pub unit: String,
     pub threshold: f64,
+    /// The threshold's unit: the value's, or `%` for a symmetry index.
+    pub threshold_unit: String,
     /// `above` or `below`: which side of the threshold is the deviation.
     pub beyond: &'static str,
     /// Where the threshold comes from.
@@ -73,6 +75,7 @@ impl Verdict {
             spread: f64::NAN,
             unit: item.unit.into(),
             threshold: f64::NAN,
+            threshold_unit: item.unit.into(),
             beyond: "above",
             source: String::new(),
             cycles: Vec::new(),
@@ -98,7 +101,7 @@ fn list(v: &[usize]) -> String {
 pub fn csv(verdicts: &[Verdict]) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());
     let _ = w.write_record([
-        "item", "side", "verdict", "measure", "value", "spread", "unit", "threshold", "beyond",
+        "item", "side", "verdict", "measure", "value", "spread", "unit", "threshold", "threshold_unit", "beyond",
         "source", "cycles", "frames", "view", "amputation", "reason",
     ]);
     for v in verdicts {
@@ -111,6 +114,7 @@ pub fn csv(verdicts: &[Verdict]) -> String {
             &num(v.spread),
             &v.unit,
             &num(v.threshold),
+            &v.threshold_unit,
             v.beyond,
             &v.source,
             &list(&v.cycles),

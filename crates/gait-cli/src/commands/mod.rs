@@ -9,6 +9,7 @@ pub mod kin;
 pub mod models;
 pub mod review;
 pub mod run;
+pub mod visit;
 
 use std::path::{Path, PathBuf};
 
