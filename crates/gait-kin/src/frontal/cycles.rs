@@ -29,7 +29,7 @@ pub struct FrontalScalar {
 #[derive(Debug, Clone, Serialize)]
 pub struct FootLength {
     pub side: Side,
-    /// `step_width` (at a heel strike) or `circumduction` (over a stride).
+    /// `step_width` or `heel_offset` (at a heel strike), or `circumduction` (over a stride).
     pub measure: &'static str,
     pub first_frame: usize,
     pub last_frame: usize,
@@ -224,6 +224,36 @@ impl Feet<'_> {
                     first_frame: e.frame,
                     last_frame: e.frame,
                     value: w,
+                    unit,
+                })
+            })
+            .collect()
+    }
+
+    /// At each heel strike `keep` admits, the striking heel's lateral distance from the
+    /// pelvis' midpoint (half the walking base, the side's own share of it: a step width
+    /// grows at both feet's heel strikes when one foot is placed wide).
+    pub fn heel_offsets(
+        &self,
+        events: &[Event],
+        keep: &dyn Fn(usize) -> bool,
+        kin: &KinematicsConfig,
+    ) -> Vec<FootLength> {
+        let (per_leg, unit) = unit(kin);
+        events
+            .iter()
+            .filter(|e| e.event == EventKind::HeelStrike && keep(e.frame))
+            .filter_map(|e| {
+                let heel = self.point(e.side, &["heel", "ankle"], e.frame)?;
+                let pelvis = self.t.pelvis(e.frame.checked_sub(self.t.first_frame)?)?;
+                let leg = self.scale.leg_px(e.frame - self.t.first_frame);
+                let v = self.view.toward(e.side) * (heel.0 - pelvis.0) / leg * per_leg;
+                v.is_finite().then_some(FootLength {
+                    side: e.side,
+                    measure: "heel_offset",
+                    first_frame: e.frame,
+                    last_frame: e.frame,
+                    value: v,
                     unit,
                 })
             })
