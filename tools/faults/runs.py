@@ -123,6 +123,7 @@ def _manifest(text, run_dir):
     # decides it from the keypoints: the same analysis, recorded as declared or as decided.
     v.get("config", {}).get("kinematics", {}).pop("view", None)
     v.get("kinematics", {}).pop("view", None)
+    v.get("extra", {}).get("kinematics", {}).pop("view", None)
     return clean(v)
 
 

@@ -179,6 +179,7 @@ impl Plan {
             });
             configs.push(config);
         }
+        bad.extend(Self::inconsistent_visits(&rows, &configs));
         if !bad.is_empty() {
             return Err(BatchError::BadRows {
                 path: study.path.clone(),
@@ -194,7 +195,31 @@ impl Plan {
         Ok((plan, configs))
     }
 
-    /// Writes `batch/plan.json` and each row's resolved config into `out`.
+    /// Rows of one visit (subject and session) must agree on the prosthetic side and the
+/// amputation level: the visit's checklist is one patient's.
+fn inconsistent_visits(rows: &[PlannedRow], configs: &[PipelineConfig]) -> Vec<String> {
+    let mut bad = Vec::new();
+    for ((subject, session), group) in crate::visits::groups(rows) {
+        let of = |r: &PlannedRow| {
+            let c = rows.iter().position(|x| x.index == r.index).map(|i| &configs[i].kinematics);
+            (
+                c.and_then(|k| k.prosthetic_side).map(|s| s.name()),
+                c.and_then(|k| k.amputation).map(|a| a.name()),
+            )
+        };
+        let first = of(group[0]);
+        if group.iter().any(|r| of(r) != first) {
+            let names: Vec<String> = group.iter().map(|r| format!("row {}", r.index + 1)).collect();
+            bad.push(format!(
+                "the visit of subject {subject} session {session} ({}): its rows differ in prosthetic side or amputation level",
+                names.join(", ")
+            ));
+        }
+    }
+    bad
+}
+
+/// Writes `batch/plan.json` and each row's resolved config into `out`.
     pub fn write(&self, out: &Path, configs: &[PipelineConfig]) -> Result<(), BatchError> {
         let dir = out.join("batch").join("configs");
         std::fs::create_dir_all(&dir).map_err(io(&dir))?;
