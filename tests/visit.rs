@@ -167,7 +167,7 @@ fn a_visit_of_the_sample_and_its_mirror_takes_each_side_from_its_near_view() {
             .args(["--set", "report.pdf=false", "--set", "report.overlay=false"]),
     );
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("visit of 2 pass(es)"), "{err}");
+    assert!(err.contains("visit of 2 pass(es) combined in"), "{err}");
     let visit = curves(&out.join("visit_cycles.csv"), 1, 2, 4);
     for (side, pass) in [("left", "1-left"), ("right", "2-right")] {
         let own = curves(&out.join("passes").join(pass).join("cycles.csv"), 0, 1, 3);

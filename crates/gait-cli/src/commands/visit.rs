@@ -82,7 +82,9 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
         }),
         amputation: kin.amputation.map(|a| a.name()),
     };
+    let t = std::time::Instant::now();
     let summary = gait_visit::write(&args.out, &done, &o).map_err(|e| CliError::new(e.to_string()))?;
+    let combined_s = t.elapsed().as_secs_f64();
     print_pdf(&base, &summary.report, &args.out);
     let present = if summary.present.is_empty() {
         "none".to_string()
@@ -90,7 +92,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
         summary.present.join(", ")
     };
     eprintln!(
-        "visit of {} pass(es) -> {} (deviations present: {present})",
+        "visit of {} pass(es) combined in {combined_s:.2} s -> {} (deviations present: {present})",
         done.len(),
         summary.report.display()
     );
