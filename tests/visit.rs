@@ -58,9 +58,17 @@ fn visit(case: &Path, height_m: f64, work: &Path) -> BTreeSet<String> {
         normative: Some(gait_eval::Normative::load("schwartz2008_free").unwrap()),
         prosthetic: Some(gait_checklist::Side::Right),
         amputation: None,
+        label: gait_visit::VisitLabel {
+            subject: "S".into(),
+            session: case.file_name().unwrap().to_string_lossy().into_owned(),
+            date: String::new(),
+        },
     };
     let summary = gait_visit::write(&work.join("visit"), &passes, &o).expect("visit");
-    assert!(work.join("visit/report.html").is_file() && work.join("visit/visit_checklist.csv").is_file());
+    assert!(
+        work.join("visit/report.html").is_file()
+            && work.join("visit/visit_checklist.csv").is_file()
+    );
     summary.present.into_iter().collect()
 }
 
@@ -81,7 +89,13 @@ fn item_of(case: &str) -> &'static str {
 /// The larger size of each deviation, which must be found (vaulting and the shorter stance
 /// are reported, not required: gait does not measure vaulting yet, and a stance 10 % shorter
 /// moves the symmetry index to about the 10 % threshold).
-const REQUIRED: [&str; 5] = ["trunk_lean_10", "wide_base_10", "circumduction_10", "hip_hike_10", "knee_flexed_15"];
+const REQUIRED: [&str; 5] = [
+    "trunk_lean_10",
+    "wide_base_10",
+    "circumduction_10",
+    "hip_hike_10",
+    "knee_flexed_15",
+];
 
 #[test]
 fn planted_deviations_are_found_on_their_side_only() {
@@ -92,7 +106,11 @@ fn planted_deviations_are_found_on_their_side_only() {
         let subject = common::read_json(&data.join(trial).join("subject.json"));
         let height = subject["leg_length_cm"].as_f64().unwrap() / 100.0 / 0.491;
         let cases = common::read_json(&data.join(trial).join("cases.json"));
-        let baseline = visit(&data.join(trial).join("none"), height, &work.path().join(trial).join("none"));
+        let baseline = visit(
+            &data.join(trial).join("none"),
+            height,
+            &work.path().join(trial).join("none"),
+        );
         println!("{trial} none: present {baseline:?}");
         // The Parkinson's walker's right steps are 27-32 % longer than the left in both side
         // views of the unmodified trial: a real asymmetry, which the checklist reports.
@@ -101,22 +119,40 @@ fn planted_deviations_are_found_on_their_side_only() {
             _ => BTreeSet::new(),
         };
         if baseline != real {
-            failures.push(format!("{trial} unmodified: {baseline:?}, expected {real:?}"));
+            failures.push(format!(
+                "{trial} unmodified: {baseline:?}, expected {real:?}"
+            ));
         }
-        for case in cases["written"].as_array().unwrap().iter().filter_map(|c| c.as_str()) {
+        for case in cases["written"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|c| c.as_str())
+        {
             if case == "none" {
                 continue;
             }
-            let found = visit(&data.join(trial).join(case), height, &work.path().join(trial).join(case));
+            let found = visit(
+                &data.join(trial).join(case),
+                height,
+                &work.path().join(trial).join(case),
+            );
             let item = item_of(case);
             let on_right = found.contains(&format!("{item} (right)"));
-            let new_left: Vec<&String> = found.iter().filter(|f| f.ends_with("(left)") && !baseline.contains(*f)).collect();
-            println!("{trial} {case}: {item} on the right {on_right}; new on the left {new_left:?}; all {found:?}");
+            let new_left: Vec<&String> = found
+                .iter()
+                .filter(|f| f.ends_with("(left)") && !baseline.contains(*f))
+                .collect();
+            println!(
+                "{trial} {case}: {item} on the right {on_right}; new on the left {new_left:?}; all {found:?}"
+            );
             if !new_left.is_empty() {
                 failures.push(format!("{trial} {case}: on the left {new_left:?}"));
             }
             if REQUIRED.contains(&case) && !on_right {
-                failures.push(format!("{trial} {case}: {item} not found on the right ({found:?})"));
+                failures.push(format!(
+                    "{trial} {case}: {item} not found on the right ({found:?})"
+                ));
             }
         }
     }
@@ -124,7 +160,12 @@ fn planted_deviations_are_found_on_their_side_only() {
 }
 
 /// `(side, curve) -> means` of the sagittal rows of a visit_cycles.csv or a run's cycles.csv.
-fn curves(path: &Path, side_col: usize, name_col: usize, mean_col: usize) -> std::collections::BTreeMap<(String, String), Vec<f64>> {
+fn curves(
+    path: &Path,
+    side_col: usize,
+    name_col: usize,
+    mean_col: usize,
+) -> std::collections::BTreeMap<(String, String), Vec<f64>> {
     let mut out: std::collections::BTreeMap<(String, String), Vec<f64>> = Default::default();
     let mut r = csv::Reader::from_path(path).unwrap();
     for rec in r.records() {
@@ -174,8 +215,15 @@ fn a_visit_of_the_sample_and_its_mirror_takes_each_side_from_its_near_view() {
         for joint in ["hip", "knee", "ankle"] {
             let key = (side.to_string(), joint.to_string());
             let (a, b) = (&visit[&key], &own[&key]);
-            let d = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
-            assert!(d < 1e-3, "{side} {joint}: visit differs from its pass by {d}");
+            let d = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                d < 1e-3,
+                "{side} {joint}: visit differs from its pass by {d}"
+            );
         }
     }
     // The mirror's right limb is the original's left limb seen from the other side: how close
@@ -183,12 +231,65 @@ fn a_visit_of_the_sample_and_its_mirror_takes_each_side_from_its_near_view() {
     let original = curves(&out.join("passes/1-left/cycles.csv"), 0, 1, 3);
     let mirror = curves(&out.join("passes/2-right/cycles.csv"), 0, 1, 3);
     for joint in ["hip", "knee", "ankle"] {
-        let (a, b) = (&original[&("left".into(), joint.into())], &mirror[&("right".into(), joint.into())]);
-        let rms = (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt();
+        let (a, b) = (
+            &original[&("left".into(), joint.into())],
+            &mirror[&("right".into(), joint.into())],
+        );
+        let rms =
+            (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt();
         println!("{joint}: original left vs mirrored right, RMS {rms:.2} deg");
     }
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    assert!(html.contains("left sagittal curves: left view (sports2d-demo.mp4) (near the camera)"), "report names the sources");
+    assert!(
+        html.contains("left sagittal curves: left view (sports2d-demo.mp4) (near the camera)"),
+        "report names the sources"
+    );
     assert!(html.contains("right sagittal curves: right view (mirrored.mp4) (near the camera)"));
     assert!(html.contains("Amputee gait-deviation checklist"));
+}
+
+/// Progress across visits: the Parkinson's walk unmodified, then with the right hip hiking 10
+/// deg in swing. `gait progress` calls the change on hip hiking of the right side and nothing
+/// on the left.
+#[test]
+fn progress_calls_the_planted_change_and_nothing_on_the_other_side() {
+    let data = planted();
+    let work = tempfile::tempdir().unwrap();
+    let subject = common::read_json(&data.join("gaitkit_pd/subject.json"));
+    let height = subject["leg_length_cm"].as_f64().unwrap() / 100.0 / 0.491;
+    let before = work.path().join("none");
+    let after = work.path().join("hip_hike_10");
+    visit(&data.join("gaitkit_pd/none"), height, &before);
+    visit(&data.join("gaitkit_pd/hip_hike_10"), height, &after);
+    let out = work.path().join("progress");
+    let o = run_ok(
+        gait()
+            .arg("progress")
+            .arg(before.join("visit"))
+            .arg(after.join("visit"))
+            .arg("--out")
+            .arg(&out),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    let mut r = csv::Reader::from_path(out.join("progress.csv")).unwrap();
+    let calls: Vec<(String, String, String)> = r
+        .records()
+        .map(|x| x.unwrap())
+        .filter(|x| &x[7] == "change")
+        .map(|x| (x[0].to_string(), x[1].to_string(), x[4].to_string()))
+        .collect();
+    println!("{err}\n{calls:?}");
+    assert!(
+        calls.iter().any(|c| c.0 == "hip_hiking" && c.1 == "right"),
+        "{calls:?}"
+    );
+    assert!(
+        calls.iter().all(|c| c.1 == "right"),
+        "a change on the left: {calls:?}"
+    );
+    assert!(
+        std::fs::read_to_string(out.join("progress.html"))
+            .unwrap()
+            .contains("Progress across visits")
+    );
 }

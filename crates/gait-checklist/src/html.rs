@@ -3,11 +3,18 @@
 use crate::{Checklist, Status};
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 fn num(v: f64) -> String {
-    if v.is_finite() { format!("{v:.2}") } else { String::new() }
+    if v.is_finite() {
+        format!("{v:.2}")
+    } else {
+        String::new()
+    }
 }
 
 impl Checklist {
@@ -35,7 +42,11 @@ impl Checklist {
             Status::NotAssessable => 2,
         };
         rows.sort_by_key(|(_, v)| rank(v.status));
-        let from_head = if sources.is_some() { "<th>From</th>" } else { "" };
+        let from_head = if sources.is_some() {
+            "<th>From</th>"
+        } else {
+            ""
+        };
         let mut out = format!(
             "<h2 id=\"checklist\">Amputee gait-deviation checklist</h2><p>Each item of the observational checklists (Berger 1992; Northwestern University Prosthetic-Orthotic Center) judged by a measure against a threshold with its source, per side. {}. This is a measurement, not a diagnosis. Also in checklist.csv.</p><table><thead><tr><th>Item</th><th>Side</th><th>Verdict</th><th>Value ± SD</th><th>Threshold</th><th>Measure and source</th><th>Cycles (first frames)</th>{from_head}</tr></thead><tbody>",
             escape(&level)

@@ -30,8 +30,19 @@ impl Threshold {
 
 /// Present when the mean over the samples passes the threshold; the cycles listed are those
 /// whose own value passes it. No sample: not assessable, with `none` as the reason.
-pub fn judge(item: Item, side: Side, samples: &[Sample], t: Threshold, unit: &str, none: &str) -> Verdict {
-    let values: Vec<f64> = samples.iter().map(|s| s.value).filter(|v| v.is_finite()).collect();
+pub fn judge(
+    item: Item,
+    side: Side,
+    samples: &[Sample],
+    t: Threshold,
+    unit: &str,
+    none: &str,
+) -> Verdict {
+    let values: Vec<f64> = samples
+        .iter()
+        .map(|s| s.value)
+        .filter(|v| v.is_finite())
+        .collect();
     if values.is_empty() || !t.value.is_finite() {
         return Verdict::not_assessable(item, side, none);
     }
@@ -46,9 +57,14 @@ pub fn judge(item: Item, side: Side, samples: &[Sample], t: Threshold, unit: &st
     Verdict {
         item,
         side,
-        status: if t.passed(mean) { Status::Present } else { Status::Absent },
+        status: if t.passed(mean) {
+            Status::Present
+        } else {
+            Status::Absent
+        },
         value: mean,
         spread,
+        n: values.len(),
         unit: unit.into(),
         threshold: t.value,
         threshold_unit: unit.into(),

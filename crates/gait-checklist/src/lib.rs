@@ -9,8 +9,8 @@
 //! written from its [`Checklist`].
 
 mod config;
-mod html;
 mod frontal_items;
+mod html;
 mod judge;
 mod run_files;
 mod sagittal_items;
@@ -54,11 +54,23 @@ impl Side {
 /// Items of the lists that gait does not measure yet: always "not assessable", so the
 /// checklist shows the whole list, not only what is easy.
 const UNMEASURED: [Item; 6] = [
-    unmeasured("vaulting", "Vaulting (the sound foot rising early on its toes)", "side"),
+    unmeasured(
+        "vaulting",
+        "Vaulting (the sound foot rising early on its toes)",
+        "side",
+    ),
     unmeasured("terminal_swing_impact", "Terminal swing impact", "side"),
     unmeasured("foot_slap", "Foot slap", "side"),
-    unmeasured("medial_lateral_whip", "Medial or lateral whip at toe-off", "front or back"),
-    unmeasured("excessive_trunk_flexion", "Excessive trunk flexion or lordosis", "side"),
+    unmeasured(
+        "medial_lateral_whip",
+        "Medial or lateral whip at toe-off",
+        "front or back",
+    ),
+    unmeasured(
+        "excessive_trunk_flexion",
+        "Excessive trunk flexion or lordosis",
+        "side",
+    ),
     unmeasured("uneven_arm_swing", "Uneven arm swing", "side"),
 ];
 
@@ -97,12 +109,21 @@ pub fn assess(
     let frontal_norm = norm.and_then(|n| gait_eval::frontal::norms(Some(&n.name)));
     let mut verdicts = Vec::new();
     for side in Side::BOTH {
-        verdicts.extend(frontal_items::assess(&run, side, cfg, frontal_norm.as_ref()));
+        verdicts.extend(frontal_items::assess(
+            &run,
+            side,
+            cfg,
+            frontal_norm.as_ref(),
+        ));
     }
     verdicts.extend(sagittal_items::assess(&run, cfg, norm));
     for item in UNMEASURED {
         for side in Side::BOTH {
-            verdicts.push(Verdict::not_assessable(item, side, "not measured by gait yet"));
+            verdicts.push(Verdict::not_assessable(
+                item,
+                side,
+                "not measured by gait yet",
+            ));
         }
     }
     Ok(Checklist {

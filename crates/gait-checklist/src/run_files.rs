@@ -23,6 +23,7 @@ pub struct Param {
     pub side: String,
     pub mean: f64,
     pub sd: f64,
+    pub n: usize,
     pub unit: String,
 }
 
@@ -103,8 +104,8 @@ impl RunFiles {
         r.strides = strides(dir)?;
         if let Some((h, rows)) = read(&dir.join("cycles_all.csv"))? {
             let f = "cycles_all.csv";
-            let [s, j, first, p, v] = ["side", "joint", "first_frame", "percent", "value"]
-                .map(|n| col(&h, n, f));
+            let [s, j, first, p, v] =
+                ["side", "joint", "first_frame", "percent", "value"].map(|n| col(&h, n, f));
             let (s, j, first, p, v) = (s?, j?, first?, p?, v?);
             for row in rows {
                 let Some(sd) = side(&row[s]) else { continue };
@@ -125,6 +126,7 @@ impl RunFiles {
                 col(&h, "sd", f)?,
                 col(&h, "unit", f)?,
             );
+            let n = col(&h, "n", f)?;
             r.spatiotemporal = rows
                 .iter()
                 .map(|row| Param {
@@ -132,6 +134,7 @@ impl RunFiles {
                     side: row[s].clone(),
                     mean: num(&row[m]),
                     sd: num(&row[sd]),
+                    n: num(&row[n]) as usize,
                     unit: row[u].clone(),
                 })
                 .collect();
@@ -140,7 +143,9 @@ impl RunFiles {
             let frame = col(&h, "frame", "frontal_angles.csv")?;
             for (k, name) in h.iter().enumerate() {
                 if name.starts_with("left_") || name.starts_with("right_") {
-                    let series = rows.iter().map(|row| (num(&row[frame]) as usize, num(&row[k])));
+                    let series = rows
+                        .iter()
+                        .map(|row| (num(&row[frame]) as usize, num(&row[k])));
                     r.frontal.insert(name.clone(), series.collect());
                 }
             }

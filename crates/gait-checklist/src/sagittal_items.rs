@@ -52,7 +52,10 @@ pub const KNEE_EXTENSION: Item = Item {
 /// The symmetry items: each side's mean, present on the larger side when the symmetry index
 /// passes `checklist.symmetry_pct`.
 fn symmetry(run: &RunFiles, item: Item, parameter: &str, cfg: &ChecklistConfig) -> [Verdict; 2] {
-    let row = |s: Side| run.param(parameter, s.name()).filter(|p| p.mean.is_finite());
+    let row = |s: Side| {
+        run.param(parameter, s.name())
+            .filter(|p| p.mean.is_finite())
+    };
     let (Some(l), Some(r)) = (row(Side::Left), row(Side::Right)) else {
         let why = "needs accepted steps of both sides";
         return Side::BOTH.map(|s| Verdict::not_assessable(item, s, why));
@@ -64,9 +67,14 @@ fn symmetry(run: &RunFiles, item: Item, parameter: &str, cfg: &ChecklistConfig) 
             Side::Right => (r, si < 0.0),
         };
         let mut v = Verdict::not_assessable(item, side, "");
-        v.status = if larger && si.abs() > cfg.symmetry_pct { Status::Present } else { Status::Absent };
+        v.status = if larger && si.abs() > cfg.symmetry_pct {
+            Status::Present
+        } else {
+            Status::Absent
+        };
         v.value = own.mean;
         v.spread = own.sd;
+        v.n = own.n;
         v.unit = own.unit.clone();
         v.threshold = cfg.symmetry_pct;
         v.threshold_unit = "%".into();
@@ -77,7 +85,12 @@ fn symmetry(run: &RunFiles, item: Item, parameter: &str, cfg: &ChecklistConfig) 
 }
 
 /// Per accepted cycle of `side`, the knee's extreme over `range` (% of the cycle).
-fn knee(run: &RunFiles, side: Side, range: std::ops::RangeInclusive<usize>, largest: bool) -> Vec<Sample> {
+fn knee(
+    run: &RunFiles,
+    side: Side,
+    range: std::ops::RangeInclusive<usize>,
+    largest: bool,
+) -> Vec<Sample> {
     run.sagittal
         .iter()
         .filter(|((s, joint, _), _)| *s == side && joint == "knee")
@@ -90,7 +103,11 @@ fn knee(run: &RunFiles, side: Side, range: std::ops::RangeInclusive<usize>, larg
                 pick.min_by(|&a, &b| curve[a].total_cmp(&curve[b]))
             }?;
             let frame = stride.first + ((stride.last - stride.first) * p) / 100;
-            Some(Sample { value: curve[p], first: stride.first, frame })
+            Some(Sample {
+                value: curve[p],
+                first: stride.first,
+                frame,
+            })
         })
         .collect()
 }
@@ -105,7 +122,11 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig, norm: Option<&Normative>) -
             .collect();
     }
     let mut out = Vec::new();
-    for (item, p) in [(STEP_TIME, "step_time"), (STANCE, "stance"), (STEP_LENGTH, "step_length")] {
+    for (item, p) in [
+        (STEP_TIME, "step_time"),
+        (STANCE, "stance"),
+        (STEP_LENGTH, "step_length"),
+    ] {
         out.extend(symmetry(run, item, p, cfg));
     }
     let curve = norm.and_then(|n| n.curve("knee"));
@@ -113,20 +134,42 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig, norm: Option<&Normative>) -
     for side in Side::BOTH {
         let few = "no accepted cycle of this side";
         let no_norm = "no normative band (report.normative = \"none\")";
-        let flex = curve.map(|c| (0..=40).map(|p| c.mean[p] + k * c.sd[p]).fold(f64::MIN, f64::max));
+        let flex = curve.map(|c| {
+            (0..=40)
+                .map(|p| c.mean[p] + k * c.sd[p])
+                .fold(f64::MIN, f64::max)
+        });
         let t = Threshold {
             value: flex.unwrap_or(f64::NAN),
             beyond: "above",
             source: format!("the normative knee flexion, mean + {k} SD, its largest in 0-40 %"),
         };
-        out.push(judge(KNEE_FLEXION, side, &knee(run, side, 0..=40, true), t, "deg", if curve.is_some() { few } else { no_norm }));
-        let ext = curve.map(|c| (10..=50).map(|p| c.mean[p] - k * c.sd[p]).fold(f64::MAX, f64::min));
+        out.push(judge(
+            KNEE_FLEXION,
+            side,
+            &knee(run, side, 0..=40, true),
+            t,
+            "deg",
+            if curve.is_some() { few } else { no_norm },
+        ));
+        let ext = curve.map(|c| {
+            (10..=50)
+                .map(|p| c.mean[p] - k * c.sd[p])
+                .fold(f64::MAX, f64::min)
+        });
         let t = Threshold {
             value: ext.unwrap_or(f64::NAN),
             beyond: "below",
             source: format!("the normative knee flexion, mean - {k} SD, its smallest in 10-50 %"),
         };
-        out.push(judge(KNEE_EXTENSION, side, &knee(run, side, 10..=50, false), t, "deg", if curve.is_some() { few } else { no_norm }));
+        out.push(judge(
+            KNEE_EXTENSION,
+            side,
+            &knee(run, side, 10..=50, false),
+            t,
+            "deg",
+            if curve.is_some() { few } else { no_norm },
+        ));
     }
     out
 }

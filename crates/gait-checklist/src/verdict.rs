@@ -47,6 +47,8 @@ pub struct Verdict {
     /// Mean over the side's cycles (or steps), and their SD.
     pub value: f64,
     pub spread: f64,
+    /// How many cycles (or steps) the value is the mean of.
+    pub n: usize,
     /// The unit of value, spread and threshold (the item's, or leg lengths without a scale).
     pub unit: String,
     pub threshold: f64,
@@ -73,6 +75,7 @@ impl Verdict {
             status: Status::NotAssessable,
             value: f64::NAN,
             spread: f64::NAN,
+            n: 0,
             unit: item.unit.into(),
             threshold: f64::NAN,
             threshold_unit: item.unit.into(),
@@ -101,8 +104,23 @@ fn list(v: &[usize]) -> String {
 pub fn csv(verdicts: &[Verdict]) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());
     let _ = w.write_record([
-        "item", "side", "verdict", "measure", "value", "spread", "unit", "threshold", "threshold_unit", "beyond",
-        "source", "cycles", "frames", "view", "amputation", "reason",
+        "item",
+        "side",
+        "verdict",
+        "measure",
+        "value",
+        "spread",
+        "n",
+        "unit",
+        "threshold",
+        "threshold_unit",
+        "beyond",
+        "source",
+        "cycles",
+        "frames",
+        "view",
+        "amputation",
+        "reason",
     ]);
     for v in verdicts {
         let _ = w.write_record([
@@ -112,6 +130,7 @@ pub fn csv(verdicts: &[Verdict]) -> String {
             v.item.measure,
             &num(v.value),
             &num(v.spread),
+            &v.n.to_string(),
             &v.unit,
             &num(v.threshold),
             &v.threshold_unit,

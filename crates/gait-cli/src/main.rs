@@ -48,6 +48,8 @@ enum Command {
     Batch(commands::batch::Args),
     /// A patient's visit: passes from the left, right, front and back in one report.
     Visit(commands::visit::Args),
+    /// A subject's visits side by side: which differences are changes.
+    Progress(commands::progress::Args),
 }
 
 fn main() -> ExitCode {
@@ -63,6 +65,7 @@ fn main() -> ExitCode {
         Command::Export(args) => commands::export::execute(args),
         Command::Review(args) => commands::review::execute(args),
         Command::Visit(args) => commands::visit::execute(args, &models_dir),
+        Command::Progress(args) => commands::progress::execute(args),
         Command::Batch(args) => match commands::batch::execute(args, &models_dir) {
             Ok(code) => return code,
             Err(e) => Err(e),

@@ -133,7 +133,9 @@ fn build_report(o: &OutputOptions, with_pdf: bool) -> Result<Report, PipelineErr
         crate::atomic::write(&path, s.csv().as_bytes())
             .map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))?;
     }
-    report.sections.push(checklist(o, report.normative.as_ref())?);
+    report
+        .sections
+        .push(checklist(o, report.normative.as_ref())?);
     Ok(report)
 }
 

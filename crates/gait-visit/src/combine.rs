@@ -26,7 +26,9 @@ pub fn sagittal(passes: &[Pass], sources: &mut Vec<Source>) -> Vec<CycleCurve> {
         let best = |near: bool| {
             passes
                 .iter()
-                .filter(|p| !p.is_frontal() && (p.view == side) == near && p.cycles(side, false) > 0)
+                .filter(|p| {
+                    !p.is_frontal() && (p.view == side) == near && p.cycles(side, false) > 0
+                })
                 .max_by_key(|p| p.cycles(side, false))
         };
         let (pass, how) = match (best(true), best(false)) {
@@ -40,10 +42,19 @@ pub fn sagittal(passes: &[Pass], sources: &mut Vec<Source>) -> Vec<CycleCurve> {
                 continue;
             }
         };
-        out.extend(pass.sagittal.iter().filter(|c| c.side.as_str() == side).cloned());
+        out.extend(
+            pass.sagittal
+                .iter()
+                .filter(|c| c.side.as_str() == side)
+                .cloned(),
+        );
         sources.push(Source {
             what: format!("{side} sagittal curves"),
-            pass: format!("{} ({how}), {} cycles", pass.label(), pass.cycles(side, false)),
+            pass: format!(
+                "{} ({how}), {} cycles",
+                pass.label(),
+                pass.cycles(side, false)
+            ),
         });
     }
     out
@@ -66,7 +77,12 @@ pub fn frontal(passes: &[Pass], sources: &mut Vec<Source>) -> (Vec<CycleCurve>, 
             continue;
         };
         view.get_or_insert_with(|| p.view.clone());
-        out.extend(p.frontal.iter().filter(|c| c.side.as_str() == side).cloned());
+        out.extend(
+            p.frontal
+                .iter()
+                .filter(|c| c.side.as_str() == side)
+                .cloned(),
+        );
         sources.push(Source {
             what: format!("{side} frontal curves"),
             pass: format!("{}, {} cycles", p.label(), p.cycles(side, true)),
@@ -89,7 +105,9 @@ pub fn spatiotemporal(passes: &[Pass]) -> Vec<StParam> {
             let rows: Vec<&StParam> = passes
                 .iter()
                 .flat_map(|p| &p.spatiotemporal)
-                .filter(|r| r.parameter == parameter && r.side == side && r.n > 0 && r.mean.is_finite())
+                .filter(|r| {
+                    r.parameter == parameter && r.side == side && r.n > 0 && r.mean.is_finite()
+                })
                 .collect();
             if let Some(p) = pool(&rows) {
                 out.push(p);
@@ -97,7 +115,11 @@ pub fn spatiotemporal(passes: &[Pass]) -> Vec<StParam> {
         }
     }
     for parameter in ["stride_time", "step_time", "stance"] {
-        let mean = |s: &str| out.iter().find(|r| r.parameter == parameter && r.side == s).map(|r| (r.mean, r.n));
+        let mean = |s: &str| {
+            out.iter()
+                .find(|r| r.parameter == parameter && r.side == s)
+                .map(|r| (r.mean, r.n))
+        };
         if let (Some((l, nl)), Some((r, nr))) = (mean("left"), mean("right")) {
             out.push(StParam {
                 parameter: format!("symmetry_index_{parameter}"),
@@ -122,7 +144,11 @@ fn pool(rows: &[&StParam]) -> Option<StParam> {
     let ss: f64 = rows
         .iter()
         .map(|r| {
-            let within = if r.sd.is_finite() { r.sd * r.sd * (r.n as f64 - 1.0) } else { 0.0 };
+            let within = if r.sd.is_finite() {
+                r.sd * r.sd * (r.n as f64 - 1.0)
+            } else {
+                0.0
+            };
             within + r.n as f64 * (r.mean - mean).powi(2)
         })
         .sum();
@@ -130,7 +156,11 @@ fn pool(rows: &[&StParam]) -> Option<StParam> {
         parameter: rows[0].parameter.clone(),
         side: rows[0].side.clone(),
         mean,
-        sd: if n > 1 { (ss / (n as f64 - 1.0)).sqrt() } else { f64::NAN },
+        sd: if n > 1 {
+            (ss / (n as f64 - 1.0)).sqrt()
+        } else {
+            f64::NAN
+        },
         n,
         unit: rows[0].unit.clone(),
     })
@@ -159,7 +189,11 @@ pub fn checklist(per_pass: &[(&Pass, Vec<Verdict>)]) -> Vec<(Verdict, String)> {
             )
         };
         if let Some((p, v)) = candidates.max_by_key(rank) {
-            let from = if v.status == Status::NotAssessable { String::new() } else { p.label() };
+            let from = if v.status == Status::NotAssessable {
+                String::new()
+            } else {
+                p.label()
+            };
             out.push((v.clone(), from));
         }
     }

@@ -6,6 +6,7 @@
 
 mod combine;
 mod pass;
+pub mod progress;
 mod tables;
 
 use std::path::{Path, PathBuf};
@@ -16,6 +17,7 @@ use gait_eval::normative::Normative;
 
 pub use combine::Source;
 pub use pass::{Pass, VIEWS};
+pub use progress::{Change, VisitLabel, VisitRecord};
 
 #[derive(Debug, thiserror::Error)]
 pub enum VisitError {
@@ -38,6 +40,8 @@ pub struct VisitOptions<'a> {
     pub normative: Option<Normative>,
     pub prosthetic: Option<Side>,
     pub amputation: Option<&'a str>,
+    /// Who and when (visit.json), for `gait progress`.
+    pub label: VisitLabel,
 }
 
 /// What [`write`] made.
@@ -58,6 +62,11 @@ pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSumma
     let spatiotemporal = combine::spatiotemporal(passes);
     let checklist = judge_each(passes, o)?;
     tables::write_all(out, &checklist, &sagittal, &frontal, &spatiotemporal)?;
+    let label = serde_json::to_string_pretty(&o.label).unwrap_or_default();
+    std::fs::write(out.join("visit.json"), label).map_err(|source| VisitError::Io {
+        path: out.join("visit.json"),
+        source,
+    })?;
     let mut report = Report {
         title: "Visit report".into(),
         prosthetic_side: o.prosthetic.map(|s| match s {
@@ -71,7 +80,14 @@ pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSumma
     };
     report.subject = passes
         .iter()
-        .map(|p| format!("{}: {}; run folder {}", p.label(), p.status, p.dir.display()))
+        .map(|p| {
+            format!(
+                "{}: {}; run folder {}",
+                p.label(),
+                p.status,
+                p.dir.display()
+            )
+        })
         .chain(sources.iter().map(|s| format!("{}: {}", s.what, s.pass)))
         .collect();
     report.sections.push(tables::checklist_html(&checklist, o));
@@ -96,10 +112,19 @@ pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSumma
 }
 
 /// Each pass's checklist, then the best verdict per item and side.
-fn judge_each(passes: &[Pass], o: &VisitOptions) -> Result<Vec<(gait_checklist::Verdict, String)>, VisitError> {
+fn judge_each(
+    passes: &[Pass],
+    o: &VisitOptions,
+) -> Result<Vec<(gait_checklist::Verdict, String)>, VisitError> {
     let mut per_pass = Vec::new();
     for p in passes {
-        let list = gait_checklist::assess(&p.dir, o.checklist, o.normative.as_ref(), o.prosthetic, o.amputation)?;
+        let list = gait_checklist::assess(
+            &p.dir,
+            o.checklist,
+            o.normative.as_ref(),
+            o.prosthetic,
+            o.amputation,
+        )?;
         per_pass.push((p, list.verdicts));
     }
     Ok(combine::checklist(&per_pass))

@@ -34,7 +34,10 @@ impl Pass {
             message: e.to_string(),
         };
         let file = |name: &str| Some(dir.join(name)).filter(|p| p.exists());
-        let sagittal = file("cycles.csv").map(|p| read_cycles_csv(&p)).transpose().map_err(io)?;
+        let sagittal = file("cycles.csv")
+            .map(|p| read_cycles_csv(&p))
+            .transpose()
+            .map_err(io)?;
         let frontal = file("frontal_cycles.csv")
             .map(|p| read_curves_csv(&p, "measure"))
             .transpose()
@@ -71,13 +74,20 @@ impl Pass {
 
     /// A short name: `left view (L.mp4)`.
     pub fn label(&self) -> String {
-        let name = self.video.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        let name = self
+            .video
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned());
         format!("{} view ({name})", self.view)
     }
 
     /// Accepted cycles of a side in this pass (the curves' largest n).
     pub fn cycles(&self, side: &str, frontal: bool) -> usize {
-        let curves = if frontal { &self.frontal } else { &self.sagittal };
+        let curves = if frontal {
+            &self.frontal
+        } else {
+            &self.sagittal
+        };
         curves
             .iter()
             .filter(|c| c.side.as_str() == side)

@@ -21,7 +21,11 @@ fn write(path: &Path, text: &str) -> Result<(), VisitError> {
 }
 
 fn num(v: f64) -> String {
-    if v.is_finite() { format!("{v:.6}") } else { String::new() }
+    if v.is_finite() {
+        format!("{v:.6}")
+    } else {
+        String::new()
+    }
 }
 
 /// Writes the three CSV files into `out`.
@@ -37,10 +41,19 @@ pub fn write_all(
         source,
     })?;
     let verdicts: Vec<Verdict> = checklist.iter().map(|(v, _)| v.clone()).collect();
-    let list = Checklist { view: "visit".into(), prosthetic: None, amputation: None, verdicts };
+    let list = Checklist {
+        view: "visit".into(),
+        prosthetic: None,
+        amputation: None,
+        verdicts,
+    };
     let mut text = String::new();
     for (k, line) in list.csv().lines().enumerate() {
-        let from = if k == 0 { "pass".to_string() } else { format!("\"{}\"", checklist[k - 1].1) };
+        let from = if k == 0 {
+            "pass".to_string()
+        } else {
+            format!("\"{}\"", checklist[k - 1].1)
+        };
         text.push_str(&format!("{line},{from}\n"));
     }
     write(&out.join("visit_checklist.csv"), &text)?;
@@ -63,7 +76,15 @@ pub fn write_all(
     write(&out.join("visit_cycles.csv"), &text)?;
     let mut text = String::from("parameter,side,mean,sd,n,unit\n");
     for p in spatiotemporal {
-        text.push_str(&format!("{},{},{},{},{},{}\n", p.parameter, p.side, num(p.mean), num(p.sd), p.n, p.unit));
+        text.push_str(&format!(
+            "{},{},{},{},{},{}\n",
+            p.parameter,
+            p.side,
+            num(p.mean),
+            num(p.sd),
+            p.n,
+            p.unit
+        ));
     }
     write(&out.join("visit_spatiotemporal.csv"), &text)
 }

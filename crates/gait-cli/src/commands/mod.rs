@@ -7,6 +7,7 @@ pub mod eval;
 pub mod export;
 pub mod kin;
 pub mod models;
+pub mod progress;
 pub mod review;
 pub mod run;
 pub mod visit;

@@ -31,6 +31,15 @@ pub struct Args {
     /// Override a config value for every pass (repeatable)
     #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
     sets: Vec<String>,
+    /// Who the visit is (visit.json, for `gait progress`)
+    #[arg(long, default_value = "")]
+    subject: String,
+    /// Which session
+    #[arg(long, default_value = "")]
+    session: String,
+    /// The visit's date, ISO 8601 (YYYY-MM-DD)
+    #[arg(long, default_value = "")]
+    date: String,
     /// Do not draw progress bars
     #[arg(long)]
     no_progress: bool,
@@ -52,6 +61,12 @@ impl Args {
 }
 
 pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
+    if !args.date.is_empty() && !gait_batch::study::is_iso_date(&args.date) {
+        return Err(CliError::new(format!(
+            "--date {}: not ISO 8601; write it as YYYY-MM-DD (e.g. 2026-12-04)",
+            args.date
+        )));
+    }
     let passes = args.passes();
     if passes.is_empty() {
         return Err(CliError::new(
@@ -63,27 +78,44 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
     for (k, (view, video)) in passes.iter().enumerate() {
         let dir = args.out.join("passes").join(format!("{}-{view}", k + 1));
         match run_pass(&args, view, video, &dir, models_dir) {
-            Ok(()) => done.push(Pass::read(view, video, &dir).map_err(|e| CliError::new(e.to_string()))?),
+            Ok(()) => {
+                done.push(Pass::read(view, video, &dir).map_err(|e| CliError::new(e.to_string()))?)
+            }
             // The visit goes on with the passes that ran.
-            Err(e) => eprintln!("warning: the {view} pass {} failed and is left out: {}", video.display(), crate::error::one_line(&e.message)),
+            Err(e) => eprintln!(
+                "warning: the {view} pass {} failed and is left out: {}",
+                video.display(),
+                crate::error::one_line(&e.message)
+            ),
         }
     }
     if done.is_empty() {
-        return Err(CliError::new("no pass of the visit ran; see the errors above"));
+        return Err(CliError::new(
+            "no pass of the visit ran; see the errors above",
+        ));
     }
     warn_frame_rates(&done);
     let kin = &base.kinematics;
     let o = VisitOptions {
         checklist: &base.checklist,
-        normative: base.report.load_normative().map_err(|e| CliError::new(e.to_string()))?,
+        normative: base
+            .report
+            .load_normative()
+            .map_err(|e| CliError::new(e.to_string()))?,
         prosthetic: kin.prosthetic_side.map(|s| match s {
             gait_kin::Side::Left => gait_checklist::Side::Left,
             gait_kin::Side::Right => gait_checklist::Side::Right,
         }),
         amputation: kin.amputation.map(|a| a.name()),
+        label: gait_visit::VisitLabel {
+            subject: args.subject.clone(),
+            session: args.session.clone(),
+            date: args.date.clone(),
+        },
     };
     let t = std::time::Instant::now();
-    let summary = gait_visit::write(&args.out, &done, &o).map_err(|e| CliError::new(e.to_string()))?;
+    let summary =
+        gait_visit::write(&args.out, &done, &o).map_err(|e| CliError::new(e.to_string()))?;
     let combined_s = t.elapsed().as_secs_f64();
     print_pdf(&base, &summary.report, &args.out);
     let present = if summary.present.is_empty() {
@@ -100,7 +132,13 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
 }
 
 /// One pass, as `gait run` with `kinematics.view` set to the pass's view.
-fn run_pass(args: &Args, view: &str, video: &Path, dir: &Path, models_dir: &Path) -> Result<(), CliError> {
+fn run_pass(
+    args: &Args,
+    view: &str,
+    video: &Path,
+    dir: &Path,
+    models_dir: &Path,
+) -> Result<(), CliError> {
     let mut sets = args.sets.clone();
     sets.push(format!("kinematics.view=\"{view}\""));
     let config = PipelineConfig::load(args.config.as_deref(), &sets)?;
@@ -127,11 +165,16 @@ fn warn_frame_rates(passes: &[Pass]) {
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
             .and_then(|v| v["input"]["fps"].as_f64())
     };
-    let rates: Vec<(String, f64)> = passes.iter().filter_map(|p| Some((p.label(), fps(p)?))).collect();
+    let rates: Vec<(String, f64)> = passes
+        .iter()
+        .filter_map(|p| Some((p.label(), fps(p)?)))
+        .collect();
     if let Some((first, f0)) = rates.first()
         && let Some((other, f)) = rates.iter().find(|(_, f)| (f - f0).abs() > 0.01)
     {
-        eprintln!("warning: {other} was filmed at {f} fps and {first} at {f0} fps; the visit combines them in seconds");
+        eprintln!(
+            "warning: {other} was filmed at {f} fps and {first} at {f0} fps; the visit combines them in seconds"
+        );
     }
 }
 
