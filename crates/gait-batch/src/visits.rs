@@ -56,10 +56,7 @@ pub fn write(out: &Path, plan: &Plan, cohort: &[CohortRow]) -> Result<usize, Bat
         let o = gait_visit::VisitOptions {
             checklist: &config.checklist,
             normative: config.report.load_normative().ok().flatten(),
-            prosthetic: kin.prosthetic_side.map(|s| match s {
-                gait_kin::Side::Left => gait_checklist::Side::Left,
-                gait_kin::Side::Right => gait_checklist::Side::Right,
-            }),
+            prosthetic: kin.prosthetic_side,
             amputation: kin.amputation.map(|a| a.name()),
             label: gait_visit::VisitLabel {
                 subject: subject.clone(),

@@ -75,3 +75,80 @@ pub fn judge(
         reason: String::new(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frontal_items::TRUNK;
+
+    fn at(values: &[f64]) -> Vec<Sample> {
+        values
+            .iter()
+            .enumerate()
+            .map(|(i, &value)| Sample {
+                value,
+                first: 100 * i,
+                frame: 100 * i + 7,
+            })
+            .collect()
+    }
+
+    fn t(value: f64, beyond: &'static str) -> Threshold {
+        Threshold {
+            value,
+            beyond,
+            source: "test".into(),
+        }
+    }
+
+    /// The mean decides; the cycles listed are those past the threshold on their own.
+    #[test]
+    fn the_mean_decides_and_the_cycles_past_the_threshold_are_named() {
+        let v = judge(
+            TRUNK,
+            Side::Right,
+            &at(&[4.0, 7.0, 6.0]),
+            t(5.0, "above"),
+            "deg",
+            "none",
+        );
+        assert_eq!(v.status, Status::Present);
+        assert_eq!(
+            (v.cycles.clone(), v.frames.clone(), v.n),
+            (vec![100, 200], vec![107, 207], 3)
+        );
+        assert!(
+            (v.value - 17.0 / 3.0).abs() < 1e-12 && (v.spread - (7.0f64 / 3.0).sqrt()).abs() < 1e-9
+        );
+        let v = judge(
+            TRUNK,
+            Side::Right,
+            &at(&[4.0, 7.0, 6.0]),
+            t(5.0, "below"),
+            "deg",
+            "none",
+        );
+        assert_eq!((v.status, v.cycles), (Status::Absent, vec![0]));
+    }
+
+    #[test]
+    fn no_samples_or_no_threshold_is_not_assessable_with_the_reason() {
+        let v = judge(TRUNK, Side::Left, &[], t(5.0, "above"), "deg", "no cycle");
+        assert_eq!(
+            (v.status, v.reason.as_str()),
+            (Status::NotAssessable, "no cycle")
+        );
+        let v = judge(
+            TRUNK,
+            Side::Left,
+            &at(&[9.0]),
+            t(f64::NAN, "above"),
+            "deg",
+            "no band",
+        );
+        assert_eq!(
+            (v.status, v.reason.as_str()),
+            (Status::NotAssessable, "no band")
+        );
+    }
+}

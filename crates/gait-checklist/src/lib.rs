@@ -22,6 +22,7 @@ use gait_eval::normative::Normative;
 use serde::Serialize;
 
 pub use config::ChecklistConfig;
+pub use gait_kin::Side;
 pub use run_files::RunFiles;
 pub use verdict::{Item, Status, Verdict};
 
@@ -31,24 +32,6 @@ pub enum ChecklistError {
     Config(String),
     #[error("{0}")]
     Input(String),
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Side {
-    Left,
-    Right,
-}
-
-impl Side {
-    pub const BOTH: [Side; 2] = [Side::Left, Side::Right];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Side::Left => "left",
-            Side::Right => "right",
-        }
-    }
 }
 
 /// Items of the lists that gait does not measure yet: always "not assessable", so the

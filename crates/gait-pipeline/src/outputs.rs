@@ -145,10 +145,7 @@ fn checklist(
     norm: Option<&gait_eval::normative::Normative>,
 ) -> Result<String, PipelineError> {
     let kin = &o.config.kinematics;
-    let side = kin.prosthetic_side.map(|s| match s {
-        gait_kin::Side::Left => gait_checklist::Side::Left,
-        gait_kin::Side::Right => gait_checklist::Side::Right,
-    });
+    let side = kin.prosthetic_side;
     let list = gait_checklist::assess(
         o.dir,
         &o.config.checklist,

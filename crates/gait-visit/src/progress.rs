@@ -281,3 +281,50 @@ pub fn write(out: &Path, visits: &[VisitRecord]) -> Result<Vec<Change>, VisitErr
     })?;
     Ok(changes)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn visit(session: &str, value: f64, sd: f64, n: usize) -> VisitRecord {
+        VisitRecord {
+            dir: PathBuf::new(),
+            label: VisitLabel {
+                subject: "S".into(),
+                session: session.into(),
+                date: String::new(),
+            },
+            rows: vec![Row {
+                item: "hip_hiking".into(),
+                side: "right".into(),
+                value,
+                sd,
+                n,
+                unit: "deg".into(),
+                verdict: "absent".into(),
+            }],
+        }
+    }
+
+    /// 2 deg apart with SDs of 1 deg over 4 cycles each: 1.96 x sqrt(1/4 + 1/4) = 1.39 deg, a
+    /// change; over 2 cycles each the limit is 1.96 deg, still one; with SDs of 2 deg it is not.
+    #[test]
+    fn a_change_must_exceed_the_spread_of_the_cycles() {
+        let calls = |a: VisitRecord, b: VisitRecord| changes(&[a, b])[0].call.clone();
+        assert_eq!(
+            calls(visit("1", 3.0, 1.0, 4), visit("2", 5.0, 1.0, 4)),
+            "change"
+        );
+        assert_eq!(
+            calls(visit("1", 3.0, 1.0, 2), visit("2", 5.0, 1.0, 2)),
+            "change"
+        );
+        assert_eq!(
+            calls(visit("1", 3.0, 2.0, 2), visit("2", 5.0, 2.0, 2)),
+            "no change"
+        );
+        assert!(
+            calls(visit("1", 3.0, f64::NAN, 1), visit("2", 9.0, 1.0, 4)).starts_with("not judged")
+        );
+    }
+}

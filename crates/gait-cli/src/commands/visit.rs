@@ -102,10 +102,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
             .report
             .load_normative()
             .map_err(|e| CliError::new(e.to_string()))?,
-        prosthetic: kin.prosthetic_side.map(|s| match s {
-            gait_kin::Side::Left => gait_checklist::Side::Left,
-            gait_kin::Side::Right => gait_checklist::Side::Right,
-        }),
+        prosthetic: kin.prosthetic_side,
         amputation: kin.amputation.map(|a| a.name()),
         label: gait_visit::VisitLabel {
             subject: args.subject.clone(),
