@@ -199,6 +199,16 @@ fn local_and_slurm_give_what_gait_run_gives_and_a_corrupt_video_fails_alone() {
             "cohort.html"
         );
         assert!(html.contains("S03_1_left_corrupt"));
+        // Each subject's session is a visit (issue 39): its report and checklist beside the
+        // rows; the failed row's visit is not written.
+        for visit in ["S01_1", "S01_2", "S02_1"] {
+            let dir = out.join("visits").join(visit);
+            let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
+            assert!(page.contains("Amputee gait-deviation checklist"), "{visit}");
+            assert!(page.contains("left sagittal curves: left view"), "{visit}");
+            assert!(dir.join("visit_checklist.csv").is_file(), "{visit}");
+        }
+        assert!(!out.join("visits/S03_1").exists());
         let status = gait()
             .args(["batch", "status"])
             .arg(out)
@@ -368,14 +378,16 @@ fn bad_studies_are_refused_before_anything_runs() {
          missing.mp4,S02,1,left,,,\n\
          clip_a.mp4,S03,1,left,,,pose.colour=1\n\
          clip_a.mp4,S01,1,left,,,report.pdf=false\n\
-         clip_a.mp4,S04,1,sideways,,,\n",
+         clip_a.mp4,S04,1,sideways,,,\n\
+         clip_a.mp4,S05,1,left,left,,\n\
+         clip_a.mp4,S05,1,right,right,,\n",
     )
     .unwrap();
     let out = work.path().join("out");
     let err = fails_with(
         &mut batch(&study, &out, &[]),
         &[
-            "4 bad row(s), nothing submitted",
+            "5 bad row(s), nothing submitted",
             "row 2 (missing.mp4)",
             "not found",
             "row 3",
@@ -384,6 +396,7 @@ fn bad_studies_are_refused_before_anything_runs() {
             "same run folder `S01_1_left_clip_a` as row 1",
             "row 5",
             "sideways",
+            "the visit of subject S05 session 1 (row 6, row 7): its rows differ in prosthetic side",
         ],
     );
     assert!(!err.contains("row 1 "), "{err}");

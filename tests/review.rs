@@ -433,3 +433,57 @@ fn a_save_while_a_run_writes_the_folder_is_refused() {
     assert!(body.contains(&pid) && body.contains("in use"), "{body}");
     assert!(!run.join("corrections.toml").exists());
 }
+
+/// A walk away from the camera (issue 38): the page gets the frontal measures instead of the
+/// sagittal angles, and an event removed by hand is recomputed as for a side view.
+#[test]
+fn a_back_view_shows_its_frontal_measures_and_takes_corrections() {
+    let work = tempfile::tempdir().unwrap();
+    let keypoints = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/data/frontal/gaitkit_pd_posterior/keypoints.csv");
+    let file = work.path().join("fixes.toml");
+    let server = Server::start(&[
+        "--keypoints".as_ref(),
+        keypoints.as_os_str(),
+        "--fps".as_ref(),
+        "150".as_ref(),
+        "--corrections".as_ref(),
+        file.as_os_str(),
+    ]);
+    let (status, body) = server.get("/api/analysis");
+    assert_eq!(status, 200, "{body}");
+    let an: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(an["view"], "posterior");
+    for key in [
+        "left_pelvic_obliquity",
+        "right_trunk_lean",
+        "left_hip_adduction",
+        "right_knee_varus",
+    ] {
+        let n = an["angles"][key]
+            .as_array()
+            .map_or(0, |v| v.iter().filter(|x| x.is_number()).count());
+        assert!(n > 500, "{key}: {n} values");
+    }
+    assert!(an["angles"]["left_hip"].is_null());
+    let strike = an["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["event"] == "heel_strike")
+        .unwrap()
+        .clone();
+    let before = an["events"].as_array().unwrap().len();
+    let (status, body) = server.request(
+        "POST",
+        &format!("/api/corrections?token={}", server.token()),
+        &format!(
+            r#"{{"event":[{{"side":{},"kind":"heel_strike","frame":{},"action":"remove"}}]}}"#,
+            strike["side"], strike["frame"]
+        ),
+    );
+    assert_eq!(status, 200, "{body}");
+    let after: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(after["view"], "posterior");
+    assert_eq!(after["events"].as_array().unwrap().len(), before - 1);
+}

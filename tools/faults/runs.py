@@ -119,6 +119,11 @@ def _manifest(text, run_dir):
 
     v = json.loads(text.replace(str(pathlib.Path(run_dir).resolve()), "@RUN@"))
     v.get("config", {}).get("run", {}).pop("cache_dir", None)
+    # A study row declares its view (the study's `view` column), the undisturbed `gait run`
+    # decides it from the keypoints: the same analysis, recorded as declared or as decided.
+    v.get("config", {}).get("kinematics", {}).pop("view", None)
+    v.get("kinematics", {}).pop("view", None)
+    v.get("extra", {}).get("kinematics", {}).pop("view", None)
     return clean(v)
 
 

@@ -15,6 +15,7 @@ pub mod plan;
 pub mod slurm;
 pub mod state;
 pub mod study;
+pub mod visits;
 
 use std::path::Path;
 
@@ -48,5 +49,7 @@ pub fn aggregate(out: &Path, plan: &Plan) -> Result<usize, BatchError> {
         .map(|r| r.row.name.as_str())
         .collect();
     failed.dedup();
+    // Rows of one subject and session with their views make a visit.
+    visits::write(out, plan, &rows)?;
     Ok(failed.len())
 }

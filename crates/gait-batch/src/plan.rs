@@ -26,6 +26,9 @@ pub struct PlannedRow {
     pub session: String,
     pub view: String,
     pub prosthetic_side: String,
+    /// ISO 8601, or empty.
+    #[serde(default)]
+    pub date: String,
     /// The regenerator runs a model (the rows `--split-frames` spreads).
     pub regenerates: bool,
     /// Some stage runs on a GPU (Slurm asks for one).
@@ -140,6 +143,12 @@ impl Plan {
                     VIEWS.join(", ")
                 ));
             }
+            if !row.date.trim().is_empty() && !crate::study::is_iso_date(row.date.trim()) {
+                problems.push(format!(
+                    "date `{}` is not ISO 8601 (YYYY-MM-DD, e.g. 2026-12-04)",
+                    row.date
+                ));
+            }
             if let Some(first) = names.get(&name) {
                 problems.push(format!(
                     "writes the same run folder `{name}` as row {}",
@@ -174,11 +183,13 @@ impl Plan {
                 session: row.session.clone(),
                 view: row.view.clone(),
                 prosthetic_side: row.prosthetic_side.clone(),
+                date: row.date.trim().to_string(),
                 regenerates: !config.regenerator.is_identity(),
                 gpu: config.run.device != gait_core::Device::Cpu,
             });
             configs.push(config);
         }
+        bad.extend(Self::inconsistent_visits(&rows, &configs));
         if !bad.is_empty() {
             return Err(BatchError::BadRows {
                 path: study.path.clone(),
@@ -192,6 +203,36 @@ impl Plan {
             split_frames: split_frames.max(1),
         };
         Ok((plan, configs))
+    }
+
+    /// Rows of one visit (subject and session) must agree on the prosthetic side and the
+    /// amputation level: the visit's checklist is one patient's.
+    fn inconsistent_visits(rows: &[PlannedRow], configs: &[PipelineConfig]) -> Vec<String> {
+        let mut bad = Vec::new();
+        for ((subject, session), group) in crate::visits::groups(rows) {
+            let of = |r: &PlannedRow| {
+                let c = rows
+                    .iter()
+                    .position(|x| x.index == r.index)
+                    .map(|i| &configs[i].kinematics);
+                (
+                    c.and_then(|k| k.prosthetic_side).map(|s| s.name()),
+                    c.and_then(|k| k.amputation).map(|a| a.name()),
+                )
+            };
+            let first = of(group[0]);
+            if group.iter().any(|r| of(r) != first) {
+                let names: Vec<String> = group
+                    .iter()
+                    .map(|r| format!("row {}", r.index + 1))
+                    .collect();
+                bad.push(format!(
+                "the visit of subject {subject} session {session} ({}): its rows differ in prosthetic side or amputation level",
+                names.join(", ")
+            ));
+            }
+        }
+        bad
     }
 
     /// Writes `batch/plan.json` and each row's resolved config into `out`.

@@ -1,6 +1,6 @@
 //! The study file: one row per video, as CSV (header
-//! `video,subject,session,view,prosthetic_side,config,set`) or TOML (`[[row]]` tables with the
-//! same keys). Relative paths are relative to the study file.
+//! `video,subject,session,view,prosthetic_side,config,set[,date]`) or TOML (`[[row]]` tables
+//! with the same keys). Relative paths are relative to the study file.
 
 use std::path::{Path, PathBuf};
 
@@ -18,6 +18,27 @@ pub const HEADER: [&str; 7] = [
     "config",
     "set",
 ];
+
+/// Whether `s` is an ISO 8601 date (`YYYY-MM-DD`), optionally followed by `T` and a time.
+pub fn is_iso_date(s: &str) -> bool {
+    let (date, time) = s.split_once('T').map_or((s, None), |(d, t)| (d, Some(t)));
+    let p: Vec<&str> = date.split('-').collect();
+    let num = |x: &str, n: usize, lo: u32, hi: u32| {
+        x.len() == n
+            && x.bytes().all(|b| b.is_ascii_digit())
+            && x.parse::<u32>().is_ok_and(|v| (lo..=hi).contains(&v))
+    };
+    p.len() == 3
+        && num(p[0], 4, 1900, 2999)
+        && num(p[1], 2, 1, 12)
+        && num(p[2], 2, 1, 31)
+        && time.is_none_or(|t| {
+            t.len() >= 5
+                && t.as_bytes()[2] == b':'
+                && num(&t[..2], 2, 0, 23)
+                && num(&t[3..5], 2, 0, 59)
+        })
+}
 
 /// Camera views a row may name.
 pub const VIEWS: [&str; 4] = ["left", "right", "anterior", "posterior"];
@@ -44,6 +65,10 @@ pub struct StudyRow {
     /// `table.key=value` overrides separated by `;`.
     #[serde(default)]
     pub set: String,
+    /// The visit's date, ISO 8601 (`2026-12-04`); optional, a last CSV column: orders a
+    /// subject's visits for `gait progress`.
+    #[serde(default)]
+    pub date: String,
 }
 
 /// A study file's rows, in file order.
@@ -114,11 +139,15 @@ fn read_csv(path: &Path, text: &str) -> Result<Vec<StudyRow>, BatchError> {
         .iter()
         .map(str::to_string)
         .collect();
-    if header != HEADER {
+    // `date` may follow as an eighth column.
+    let with_date = header.len() == HEADER.len() + 1
+        && header[..HEADER.len()] == HEADER
+        && header[HEADER.len()] == "date";
+    if header != HEADER && !with_date {
         return Err(bad(
             path,
             format!(
-                "the header is `{}`; expected `{}`",
+                "the header is `{}`; expected `{}` (and optionally `,date`)",
                 header.join(","),
                 HEADER.join(",")
             ),

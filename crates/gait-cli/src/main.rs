@@ -46,6 +46,10 @@ enum Command {
     Review(commands::review::Args),
     /// Run a study (one video per row) locally or on Slurm, and gather a cohort table.
     Batch(commands::batch::Args),
+    /// A patient's visit: passes from the left, right, front and back in one report.
+    Visit(commands::visit::Args),
+    /// A subject's visits side by side: which differences are changes.
+    Progress(commands::progress::Args),
 }
 
 fn main() -> ExitCode {
@@ -60,6 +64,8 @@ fn main() -> ExitCode {
         Command::Models(args) => commands::models::execute(args, &models_dir),
         Command::Export(args) => commands::export::execute(args),
         Command::Review(args) => commands::review::execute(args),
+        Command::Visit(args) => commands::visit::execute(args, &models_dir),
+        Command::Progress(args) => commands::progress::execute(args),
         Command::Batch(args) => match commands::batch::execute(args, &models_dir) {
             Ok(code) => return code,
             Err(e) => Err(e),

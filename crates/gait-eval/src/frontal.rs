@@ -12,6 +12,11 @@ use crate::plot::{CycleCurve, GraphContext, frontal_graphs, read_curves_csv};
 use crate::report::figure;
 use crate::{EvalError, Side};
 
+/// The frontal normative bands that go with a sagittal set (its speed stratum).
+pub fn norms(sagittal: Option<&str>) -> Option<Normative> {
+    crate::normative_frontal::for_sagittal(sagittal)
+}
+
 /// What the frontal section shows, read from a run folder's frontal_*.csv files.
 #[derive(Debug, Clone, Default)]
 pub struct FrontalReport {
@@ -90,22 +95,74 @@ impl FrontalReport {
                 &format!("Mean (line) ± SD (band) over the accepted cycles, left red, right blue, from each side's heel strike. {norm}"),
             ));
         }
-        if !self.scalars.is_empty() {
-            body.push_str("<h3>Frontal measures per cycle</h3>");
-            let header = [
-                "Measure",
-                "Statistic",
-                "Side",
-                "Mean",
-                "SD",
-                "Cycles",
-                "Unit",
-            ];
-            let rows: Vec<Vec<String>> = self.scalars.iter().map(|r| fmt_row(r, &[3, 4])).collect();
-            body.push_str(&table(&header.map(String::from), &rows));
-        }
+        body.push_str(&self.scalar_table(prosthetic));
         body.push_str(&self.feet_table());
         Ok(body)
+    }
+
+    /// One row per measure and statistic: each side's mean ± SD over its cycles and the
+    /// difference between the sides (frontal_scalars.csv laid out side by side).
+    fn scalar_table(&self, prosthetic: Option<Side>) -> String {
+        if self.scalars.is_empty() {
+            return String::new();
+        }
+        let name = |s: Side| match prosthetic {
+            Some(p) if p == s => format!("{} (prosthetic)", s.as_str()),
+            Some(_) => format!("{} (intact)", s.as_str()),
+            None => s.as_str().to_string(),
+        };
+        let diff_label = if prosthetic.is_some() {
+            "Prosthetic − intact"
+        } else {
+            "Left − right"
+        };
+        let cell = |measure: &str, stat: &str, side: &str| {
+            self.scalars
+                .iter()
+                .find(|r| r[0] == measure && r[1] == stat && r[2] == side)
+                .map(|r| {
+                    let f = fmt_row(r, &[3, 4]);
+                    match (f[3].as_str(), f[4].as_str()) {
+                        ("", _) => String::new(),
+                        (m, "") => m.to_string(),
+                        (m, sd) => format!("{m} ± {sd} (n={})", r[5]),
+                    }
+                })
+                .unwrap_or_default()
+        };
+        let mut rows = Vec::new();
+        let mut seen: Vec<(&str, &str)> = Vec::new();
+        for r in &self.scalars {
+            let key = (r[0].as_str(), r[1].as_str());
+            if seen.contains(&key) {
+                continue;
+            }
+            seen.push(key);
+            let diff = self
+                .scalars
+                .iter()
+                .find(|x| x[0] == key.0 && x[1] == key.1 && x[2].contains("minus"))
+                .map(|x| fmt_row(x, &[3])[3].clone())
+                .unwrap_or_default();
+            rows.push(vec![
+                key.0.replace('_', " "),
+                key.1.into(),
+                cell(key.0, key.1, "left"),
+                cell(key.0, key.1, "right"),
+                diff,
+            ]);
+        }
+        let header = [
+            "Measure (deg)".to_string(),
+            "Per cycle".into(),
+            name(Side::Left),
+            name(Side::Right),
+            diff_label.into(),
+        ];
+        format!(
+            "<h3>Frontal measures per cycle</h3><p>Each cycle's maximum, minimum and range, as mean ± SD over the accepted cycles of each side, and the difference between the sides' means.</p>{}",
+            table(&header, &rows)
+        )
     }
 
     /// Step width and circumduction per side: mean ± SD, count, range.
@@ -180,7 +237,7 @@ fn rows(path: &Path) -> Result<Vec<Vec<String>>, EvalError> {
 
 /// How the measures are signed, drawn: a walker seen from behind (posterior view), leaning
 /// toward the left with the left hip up, the left knee medial.
-const CONVENTIONS: &str = r##"<figure id="fig-frontal-conventions" class="plot"><svg xmlns="http://www.w3.org/2000/svg" width="520" height="250" viewBox="0 0 520 250" font-family="sans-serif" font-size="11">
+const CONVENTIONS: &str = r##"<figure id="fig-frontal-conventions" class="plot"><svg xmlns="http://www.w3.org/2000/svg" width="640" height="250" viewBox="0 0 640 250" font-family="sans-serif" font-size="11">
 <line x1="130" y1="30" x2="130" y2="120" stroke="#999" stroke-dasharray="4 3"/>
 <line x1="130" y1="120" x2="112" y2="38" stroke="#333" stroke-width="3"/>
 <circle cx="110" cy="28" r="9" fill="none" stroke="#333" stroke-width="2"/>

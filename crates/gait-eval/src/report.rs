@@ -65,6 +65,9 @@ pub struct Report {
     pub warnings: Vec<String>,
     /// A front or back view's frontal measures.
     pub frontal: Option<crate::frontal::FrontalReport>,
+    /// Sections made elsewhere (the gait-deviation checklist), as HTML, shown after the
+    /// warnings.
+    pub sections: Vec<String>,
 }
 
 impl Default for Report {
@@ -90,6 +93,7 @@ impl Default for Report {
             manifest: None,
             warnings: vec![],
             frontal: None,
+            sections: vec![],
         }
     }
 }
@@ -173,6 +177,9 @@ impl Report {
                 body.push_str(&format!("<li>{}</li>", escape(w)));
             }
             body.push_str("</ul>");
+        }
+        for section in &self.sections {
+            body.push_str(section);
         }
         if let Some(f) = &self.frontal {
             body.push_str(&f.html(self.prosthetic_side)?);

@@ -31,7 +31,7 @@ pub enum GapFillKind {
 }
 
 /// Body side.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Side {
     Left,
@@ -154,12 +154,31 @@ impl PostprocessConfig {
     }
 }
 
+/// The amputation level, for the gait-deviation checklist.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Amputation {
+    Transtibial,
+    Transfemoral,
+}
+
+impl Amputation {
+    pub fn name(self) -> &'static str {
+        match self {
+            Amputation::Transtibial => "transtibial",
+            Amputation::Transfemoral => "transfemoral",
+        }
+    }
+}
+
 /// `[kinematics]`: angles, events, cycles and spatiotemporal parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct KinematicsConfig {
     /// Side of the prosthesis (`left` | `right`); symmetry indices compare it with the intact side.
     pub prosthetic_side: Option<Side>,
+    /// `transtibial` or `transfemoral`: which checklist items apply (unset: those of both).
+    pub amputation: Option<Amputation>,
     /// Subject height in metres; scales pixels to cm from the median leg length (Winter's
     /// anthropometry: hip-to-ankle = 0.491 x height).
     pub subject_height_m: Option<f64>,
@@ -221,6 +240,7 @@ impl Default for KinematicsConfig {
     fn default() -> Self {
         Self {
             prosthetic_side: None,
+            amputation: None,
             subject_height_m: None,
             known_length_m: None,
             known_length_px: None,

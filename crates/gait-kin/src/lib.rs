@@ -58,7 +58,7 @@ use serde::Serialize;
 pub use angles::Angles;
 pub use bouts::Bout;
 pub use collapse::CollapseRule;
-pub use config::{FilterKind, GapFillKind, KinematicsConfig, PostprocessConfig, Side};
+pub use config::{Amputation, FilterKind, GapFillKind, KinematicsConfig, PostprocessConfig, Side};
 pub use corrections::{
     Corrections, CorrectionsSummary, EventAction, EventEdit, FrameRange, KeypointEdit,
 };

@@ -137,14 +137,18 @@ fn cycle_quality(r: &KinResult) -> Table {
 
 /// One row per side, joint and percent of the mean cycle.
 fn cycles(r: &KinResult) -> Table {
-    let rows: Vec<(&crate::CycleCurve, usize)> = r
-        .cycles
+    curves_table(&r.cycles, "joint")
+}
+
+/// Mean curves, one row per side, curve (named in column `key`) and percent of the cycle.
+pub(crate) fn curves_table(curves: &[crate::CycleCurve], key: &str) -> Table {
+    let rows: Vec<(&crate::CycleCurve, usize)> = curves
         .iter()
         .flat_map(|c| (0..c.mean.len()).map(move |p| (c, p)))
         .collect();
     Table::default()
         .with("side", texts(rows.iter().map(|(c, _)| c.side.name())))
-        .with("joint", texts(rows.iter().map(|(c, _)| &c.joint)))
+        .with(key, texts(rows.iter().map(|(c, _)| &c.joint)))
         .with("percent", ints(rows.iter().map(|(_, p)| *p)))
         .with("mean", nums(rows.iter().map(|(c, p)| c.mean[*p])))
         .with("sd", nums(rows.iter().map(|(c, p)| c.sd[*p])))

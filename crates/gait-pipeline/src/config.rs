@@ -85,9 +85,11 @@ pub struct PipelineConfig {
     pub report: ReportConfig,
     /// Files written for other tools (c3d, OpenSim, OpenPose).
     pub export: ExportConfig,
+    /// Thresholds of the amputee gait-deviation checklist (gait-checklist).
+    pub checklist: gait_checklist::ChecklistConfig,
 }
 
-const TABLES: [&str; 11] = [
+const TABLES: [&str; 12] = [
     "input",
     "run",
     "subject",
@@ -99,6 +101,7 @@ const TABLES: [&str; 11] = [
     "kinematics",
     "report",
     "export",
+    "checklist",
 ];
 
 impl PipelineConfig {
@@ -171,6 +174,7 @@ impl PipelineConfig {
             kinematics: table_as(origins, "kinematics", take("kinematics")?)?,
             report: table_as(origins, "report", take("report")?)?,
             export: table_as(origins, "export", take("export")?)?,
+            checklist: table_as(origins, "checklist", take("checklist")?)?,
         };
         config.validate(origins)?;
         Ok(config)
@@ -208,6 +212,9 @@ impl PipelineConfig {
         self.kinematics
             .validate()
             .map_err(|e| invalid("kinematics", &e.to_string()))?;
+        self.checklist
+            .validate()
+            .map_err(|e| invalid("checklist", &e.to_string()))?;
         // A bad normative file is found before any frame is processed.
         self.report.load_normative().map_err(|e| {
             invalid(

@@ -133,7 +133,31 @@ fn build_report(o: &OutputOptions, with_pdf: bool) -> Result<Report, PipelineErr
         crate::atomic::write(&path, s.csv().as_bytes())
             .map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))?;
     }
+    report
+        .sections
+        .push(checklist(o, report.normative.as_ref())?);
     Ok(report)
+}
+
+/// The gait-deviation checklist of the run folder: checklist.csv, and its report section.
+fn checklist(
+    o: &OutputOptions,
+    norm: Option<&gait_eval::normative::Normative>,
+) -> Result<String, PipelineError> {
+    let kin = &o.config.kinematics;
+    let side = kin.prosthetic_side;
+    let list = gait_checklist::assess(
+        o.dir,
+        &o.config.checklist,
+        norm,
+        side,
+        kin.amputation.map(|a| a.name()),
+    )
+    .map_err(|e| failed("the checklist", e))?;
+    let path = o.dir.join("checklist.csv");
+    crate::atomic::write(&path, list.csv().as_bytes())
+        .map_err(|e| PipelineError::io(format!("writing {}", path.display()), e))?;
+    Ok(list.html())
 }
 
 /// Adds the report's scores and files to run.json (when there is one).

@@ -408,9 +408,13 @@
     g.fillText(lastLabel, cw.width - 10 - g.measureText(lastLabel).width, cw.height - 2);
   }
 
+  // A front or back view has frontal measures instead of sagittal angles: its plots are shown.
   function drawPlots() {
     if (!S.an) return;
-    document.querySelectorAll('canvas.plot').forEach(drawPlot);
+    const frontal = S.an.view !== 'sagittal';
+    for (const joint of JOINTS) $(`plot-${joint}`).style.display = frontal ? 'none' : '';
+    document.querySelectorAll('canvas.plot.frontal').forEach((c) => { c.style.display = frontal ? '' : 'none'; });
+    document.querySelectorAll('canvas.plot').forEach((c) => { if (c.style.display !== 'none') drawPlot(c); });
   }
 
   function drawAll() {

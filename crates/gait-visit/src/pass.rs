@@ -1,0 +1,98 @@
+//! One pass of a visit: a video of one view, analysed into its own run folder.
+
+use std::path::{Path, PathBuf};
+
+use gait_eval::plot::{CycleCurve, read_curves_csv, read_cycles_csv};
+use gait_eval::spatiotemporal::{StParam, read_spatiotemporal};
+
+use crate::VisitError;
+
+/// `left`, `right` (side views), `anterior`, `posterior` (front and back views).
+pub const VIEWS: [&str; 4] = ["left", "right", "anterior", "posterior"];
+
+/// A pass and what its run folder holds.
+#[derive(Debug, Clone)]
+pub struct Pass {
+    pub view: String,
+    pub video: PathBuf,
+    /// The pass's run folder (as `gait run` writes it).
+    pub dir: PathBuf,
+    /// cycles.csv: the sagittal mean curves.
+    pub sagittal: Vec<CycleCurve>,
+    /// frontal_cycles.csv: the frontal mean curves.
+    pub frontal: Vec<CycleCurve>,
+    pub spatiotemporal: Vec<StParam>,
+    /// run.json's `status` and `reason` (a run with nothing to measure).
+    pub status: String,
+}
+
+impl Pass {
+    /// Reads the run folder of a pass.
+    pub fn read(view: &str, video: &Path, dir: &Path) -> Result<Self, VisitError> {
+        let io = |e: gait_eval::EvalError| VisitError::Pass {
+            dir: dir.to_path_buf(),
+            message: e.to_string(),
+        };
+        let file = |name: &str| Some(dir.join(name)).filter(|p| p.exists());
+        let sagittal = file("cycles.csv")
+            .map(|p| read_cycles_csv(&p))
+            .transpose()
+            .map_err(io)?;
+        let frontal = file("frontal_cycles.csv")
+            .map(|p| read_curves_csv(&p, "measure"))
+            .transpose()
+            .map_err(io)?;
+        let spatiotemporal = file("spatiotemporal.csv")
+            .map(|p| read_spatiotemporal(&p))
+            .transpose()
+            .map_err(io)?;
+        let status = file("run.json")
+            .and_then(|p| std::fs::read_to_string(p).ok())
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .map(|v| {
+                let s = v["status"].as_str().unwrap_or("done").to_string();
+                match v["reason"].as_str() {
+                    Some(r) => format!("{s}: {r}"),
+                    None => s,
+                }
+            })
+            .unwrap_or_else(|| "done".into());
+        Ok(Self {
+            view: view.into(),
+            video: video.to_path_buf(),
+            dir: dir.to_path_buf(),
+            sagittal: sagittal.unwrap_or_default(),
+            frontal: frontal.unwrap_or_default(),
+            spatiotemporal: spatiotemporal.unwrap_or_default(),
+            status,
+        })
+    }
+
+    pub fn is_frontal(&self) -> bool {
+        self.view == "anterior" || self.view == "posterior"
+    }
+
+    /// A short name: `left view (L.mp4)`.
+    pub fn label(&self) -> String {
+        let name = self
+            .video
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        format!("{} view ({name})", self.view)
+    }
+
+    /// Accepted cycles of a side in this pass (the curves' largest n).
+    pub fn cycles(&self, side: &str, frontal: bool) -> usize {
+        let curves = if frontal {
+            &self.frontal
+        } else {
+            &self.sagittal
+        };
+        curves
+            .iter()
+            .filter(|c| c.side.as_str() == side)
+            .map(|c| c.n_cycles)
+            .max()
+            .unwrap_or(0)
+    }
+}

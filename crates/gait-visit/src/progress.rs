@@ -1,0 +1,330 @@
+//! Progress across a subject's visits: each checklist item's measure visit by visit, and a
+//! change called only where it exceeds what the spread between the cycles of the two visits
+//! (and, for timing, the minimal detectable change of re-encoding and pose noise) could make.
+//!
+//! Rule: between consecutive visits a and b with means m, SDs s and counts n, the difference
+//! m_b - m_a is a change when it exceeds 1.96 x sqrt(s_a^2 / n_a + s_b^2 / n_b) (a two-sided
+//! 95 % test of the two means; a visit with a single cycle, whose SD is unknown, gives no
+//! call) and, where `gait-eval` has a minimal detectable change for the measure, that too.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::VisitError;
+
+/// Who and when a visit was (visit.json).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct VisitLabel {
+    pub subject: String,
+    pub session: String,
+    /// ISO 8601, or empty.
+    pub date: String,
+}
+
+/// One checklist row of a visit: (item, side) -> (value, SD, n, unit, verdict).
+#[derive(Debug, Clone)]
+struct Row {
+    item: String,
+    side: String,
+    value: f64,
+    sd: f64,
+    n: usize,
+    unit: String,
+    verdict: String,
+}
+
+/// A visit folder's label and checklist.
+#[derive(Debug, Clone)]
+pub struct VisitRecord {
+    pub dir: PathBuf,
+    pub label: VisitLabel,
+    rows: Vec<Row>,
+}
+
+fn io(path: &Path, e: impl std::fmt::Display) -> VisitError {
+    VisitError::Pass {
+        dir: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+impl VisitRecord {
+    /// Reads a visit folder (visit.json and visit_checklist.csv).
+    pub fn read(dir: &Path) -> Result<Self, VisitError> {
+        let label: VisitLabel = std::fs::read_to_string(dir.join("visit.json"))
+            .map_err(|e| io(dir, format!("not a visit folder (visit.json: {e})")))
+            .and_then(|t| serde_json::from_str(&t).map_err(|e| io(dir, e)))?;
+        let path = dir.join("visit_checklist.csv");
+        let mut r = csv::Reader::from_path(&path).map_err(|e| io(&path, e))?;
+        let h: Vec<String> = r
+            .headers()
+            .map_err(|e| io(&path, e))?
+            .iter()
+            .map(String::from)
+            .collect();
+        let c = |name: &str| {
+            h.iter()
+                .position(|x| x == name)
+                .ok_or_else(|| io(&path, format!("no `{name}` column")))
+        };
+        let (item, side, value, sd, n, unit, verdict) = (
+            c("item")?,
+            c("side")?,
+            c("value")?,
+            c("spread")?,
+            c("n")?,
+            c("unit")?,
+            c("verdict")?,
+        );
+        let num = |s: &str| s.parse().unwrap_or(f64::NAN);
+        let rows = r
+            .records()
+            .map(|rec| {
+                rec.map(|x| Row {
+                    item: x[item].into(),
+                    side: x[side].into(),
+                    value: num(&x[value]),
+                    sd: num(&x[sd]),
+                    n: x[n].parse().unwrap_or(0),
+                    unit: x[unit].into(),
+                    verdict: x[verdict].into(),
+                })
+                .map_err(|e| io(&path, e))
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            label,
+            rows,
+        })
+    }
+
+    fn name(&self) -> String {
+        match self.label.date.as_str() {
+            "" => format!("session {}", self.label.session),
+            d => format!("{d} (session {})", self.label.session),
+        }
+    }
+}
+
+/// A change between two consecutive visits.
+#[derive(Debug, Clone, Serialize)]
+pub struct Change {
+    pub item: String,
+    pub side: String,
+    pub from: String,
+    pub to: String,
+    pub difference: f64,
+    /// The smallest difference called a change here.
+    pub limit: f64,
+    pub unit: String,
+    /// `change` or `no change`, or `not judged: REASON`.
+    pub call: String,
+}
+
+/// The changes between consecutive visits (in the order given) for every item and side both
+/// measured.
+pub fn changes(visits: &[VisitRecord]) -> Vec<Change> {
+    let mut out = Vec::new();
+    for w in visits.windows(2) {
+        for a in w[0].rows.iter().filter(|r| r.value.is_finite()) {
+            let Some(b) = w[1]
+                .rows
+                .iter()
+                .find(|r| r.item == a.item && r.side == a.side && r.value.is_finite())
+            else {
+                continue;
+            };
+            let d = b.value - a.value;
+            let se = (a.sd.powi(2) / a.n as f64 + b.sd.powi(2) / b.n as f64).sqrt();
+            let limit = 1.96 * se;
+            let call = if !limit.is_finite() || a.n < 2 || b.n < 2 {
+                "not judged: a visit with fewer than 2 cycles has no spread".to_string()
+            } else if d.abs() > limit {
+                "change".into()
+            } else {
+                "no change".into()
+            };
+            out.push(Change {
+                item: a.item.clone(),
+                side: a.side.clone(),
+                from: w[0].name(),
+                to: w[1].name(),
+                difference: d,
+                limit,
+                unit: a.unit.clone(),
+                call,
+            });
+        }
+    }
+    out
+}
+
+/// Orders visits by date (ISO 8601 sorts as text), then session.
+pub fn order(visits: &mut [VisitRecord]) {
+    visits.sort_by(|a, b| {
+        (a.label.date.as_str(), a.label.session.as_str())
+            .cmp(&(b.label.date.as_str(), b.label.session.as_str()))
+    });
+}
+
+fn num(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.2}")
+    } else {
+        String::new()
+    }
+}
+
+/// progress.csv and progress.html of `visits` (ordered) into `out`.
+pub fn write(out: &Path, visits: &[VisitRecord]) -> Result<Vec<Change>, VisitError> {
+    let changes = changes(visits);
+    std::fs::create_dir_all(out).map_err(|source| VisitError::Io {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let mut csv = String::from("item,side,from,to,difference,limit,unit,call\n");
+    for c in &changes {
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{},{}\n",
+            c.item,
+            c.side,
+            c.from,
+            c.to,
+            num(c.difference),
+            num(c.limit),
+            c.unit,
+            c.call
+        ));
+    }
+    std::fs::write(out.join("progress.csv"), csv).map_err(|source| VisitError::Io {
+        path: out.join("progress.csv"),
+        source,
+    })?;
+    let subject = visits.first().map_or("", |v| v.label.subject.as_str());
+    let mut html = format!(
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Progress: {subject}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:24px auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:13px}}td.change{{font-weight:bold}}</style></head><body><h1>Progress across visits: {subject}</h1><p>Each checklist measure visit by visit (mean ± SD over its cycles, n cycles). A difference between two visits is called a change when it exceeds 1.96 × √(SD₁²/n₁ + SD₂²/n₂), the spread the cycles of the two visits alone could make; visits with one cycle are not judged.</p><table><tr><th>Item</th><th>Side</th>"
+    );
+    for v in visits {
+        html.push_str(&format!("<th>{}</th>", v.name()));
+    }
+    html.push_str("<th>Changes</th></tr>");
+    let mut keys: Vec<(String, String)> = visits
+        .iter()
+        .flat_map(|v| v.rows.iter().map(|r| (r.item.clone(), r.side.clone())))
+        .collect();
+    keys.dedup();
+    let mut seen = Vec::new();
+    for key in keys {
+        if seen.contains(&key)
+            || !visits.iter().any(|v| {
+                v.rows
+                    .iter()
+                    .any(|r| (r.item.clone(), r.side.clone()) == key && r.value.is_finite())
+            })
+        {
+            continue;
+        }
+        seen.push(key.clone());
+        html.push_str(&format!(
+            "<tr><td>{}</td><td>{}</td>",
+            key.0.replace('_', " "),
+            key.1
+        ));
+        for v in visits {
+            let cell = v
+                .rows
+                .iter()
+                .find(|r| r.item == key.0 && r.side == key.1)
+                .map_or(String::new(), |r| {
+                    if r.value.is_finite() {
+                        format!(
+                            "{} ± {} {} (n={}; {})",
+                            num(r.value),
+                            num(r.sd),
+                            r.unit,
+                            r.n,
+                            r.verdict
+                        )
+                    } else {
+                        r.verdict.clone()
+                    }
+                });
+            html.push_str(&format!("<td>{cell}</td>"));
+        }
+        let calls: Vec<String> = changes
+            .iter()
+            .filter(|c| c.item == key.0 && c.side == key.1)
+            .map(|c| {
+                format!(
+                    "{} → {}: {:+.2} (limit {}) {}",
+                    c.from,
+                    c.to,
+                    c.difference,
+                    num(c.limit),
+                    c.call
+                )
+            })
+            .collect();
+        let class = if calls.iter().any(|c| c.ends_with(" change")) {
+            " class=\"change\""
+        } else {
+            ""
+        };
+        html.push_str(&format!("<td{class}>{}</td></tr>", calls.join("<br>")));
+    }
+    html.push_str("</table></body></html>");
+    std::fs::write(out.join("progress.html"), html).map_err(|source| VisitError::Io {
+        path: out.join("progress.html"),
+        source,
+    })?;
+    Ok(changes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn visit(session: &str, value: f64, sd: f64, n: usize) -> VisitRecord {
+        VisitRecord {
+            dir: PathBuf::new(),
+            label: VisitLabel {
+                subject: "S".into(),
+                session: session.into(),
+                date: String::new(),
+            },
+            rows: vec![Row {
+                item: "hip_hiking".into(),
+                side: "right".into(),
+                value,
+                sd,
+                n,
+                unit: "deg".into(),
+                verdict: "absent".into(),
+            }],
+        }
+    }
+
+    /// 2 deg apart with SDs of 1 deg over 4 cycles each: 1.96 x sqrt(1/4 + 1/4) = 1.39 deg, a
+    /// change; over 2 cycles each the limit is 1.96 deg, still one; with SDs of 2 deg it is not.
+    #[test]
+    fn a_change_must_exceed_the_spread_of_the_cycles() {
+        let calls = |a: VisitRecord, b: VisitRecord| changes(&[a, b])[0].call.clone();
+        assert_eq!(
+            calls(visit("1", 3.0, 1.0, 4), visit("2", 5.0, 1.0, 4)),
+            "change"
+        );
+        assert_eq!(
+            calls(visit("1", 3.0, 1.0, 2), visit("2", 5.0, 1.0, 2)),
+            "change"
+        );
+        assert_eq!(
+            calls(visit("1", 3.0, 2.0, 2), visit("2", 5.0, 2.0, 2)),
+            "no change"
+        );
+        assert!(
+            calls(visit("1", 3.0, f64::NAN, 1), visit("2", 9.0, 1.0, 4)).starts_with("not judged")
+        );
+    }
+}

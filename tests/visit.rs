@@ -1,0 +1,295 @@
+//! A patient's visit and the gait-deviation checklist (issue 39) on deviations of known size
+//! planted in real motion capture: tools/visit/plant.py plants each deviation on the right side
+//! of the Fukuchi 2018 and gaitkit Parkinson's trials in 3-D and projects them to the left,
+//! right, front and back views; each view runs through `gait kin`, the four runs are combined
+//! as `gait visit` combines its passes, and the visit's checklist must report the deviation on
+//! the right, nothing new on the left, and nothing in the unmodified trials but what the
+//! subject really has. The figures of every case are printed (BENCHMARKS.md).
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use common::{gait, run_ok};
+
+const VIEWS: [&str; 4] = ["left", "right", "anterior", "posterior"];
+
+/// The planted data, made once per target folder (a few seconds; the gaitkit sdist is fetched
+/// by pip into target/ the first time).
+fn planted() -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let out = root.join("target/planted");
+    if !out.join("gaitkit_pd/cases.json").is_file() {
+        let status = std::process::Command::new("python3")
+            .arg(root.join("tools/visit/plant.py"))
+            .arg("--out")
+            .arg(&out)
+            .status()
+            .expect("python3 runs");
+        assert!(status.success(), "tools/visit/plant.py failed");
+    }
+    out
+}
+
+/// The visit of one case: its four views through `gait kin`, combined; the checklist items
+/// present, as `item (side)`.
+fn visit(case: &Path, height_m: f64, work: &Path) -> BTreeSet<String> {
+    let mut passes = Vec::new();
+    for view in VIEWS {
+        let keypoints = case.join(view).join("keypoints.csv");
+        let dir = work.join(view);
+        run_ok(
+            gait()
+                .args(["kin", "--fps", "150", "--keypoints"])
+                .arg(&keypoints)
+                .arg("--out")
+                .arg(&dir)
+                .args(["--set", &format!("kinematics.subject_height_m={height_m}")])
+                .args(["--set", "kinematics.prosthetic_side=\"right\""])
+                .args(["--set", &format!("kinematics.view=\"{view}\"")])
+                .args(["--set", "report.pdf=false"]),
+        );
+        passes.push(gait_visit::Pass::read(view, &keypoints, &dir).expect("pass"));
+    }
+    let cfg = gait_checklist::ChecklistConfig::default();
+    let o = gait_visit::VisitOptions {
+        checklist: &cfg,
+        normative: Some(gait_eval::Normative::load("schwartz2008_free").unwrap()),
+        prosthetic: Some(gait_checklist::Side::Right),
+        amputation: None,
+        label: gait_visit::VisitLabel {
+            subject: "S".into(),
+            session: case.file_name().unwrap().to_string_lossy().into_owned(),
+            date: String::new(),
+        },
+    };
+    let summary = gait_visit::write(&work.join("visit"), &passes, &o).expect("visit");
+    assert!(
+        work.join("visit/report.html").is_file()
+            && work.join("visit/visit_checklist.csv").is_file()
+    );
+    summary.present.into_iter().collect()
+}
+
+/// The item a planted deviation should show as.
+fn item_of(case: &str) -> &'static str {
+    match case.rsplit_once('_').map_or(case, |(d, _)| d) {
+        "trunk_lean" => "lateral_trunk_bending",
+        "wide_base" => "abducted_gait",
+        "circumduction" => "circumduction",
+        "hip_hike" => "hip_hiking",
+        "knee_flexed" => "excessive_knee_flexion_stance",
+        "short_stance" => "uneven_stance_time",
+        "vaulting" => "vaulting",
+        other => panic!("unknown case {other}"),
+    }
+}
+
+/// The larger size of each deviation, which must be found (vaulting and the shorter stance
+/// are reported, not required: gait does not measure vaulting yet, and a stance 10 % shorter
+/// moves the symmetry index to about the 10 % threshold).
+const REQUIRED: [&str; 5] = [
+    "trunk_lean_10",
+    "wide_base_10",
+    "circumduction_10",
+    "hip_hike_10",
+    "knee_flexed_15",
+];
+
+#[test]
+fn planted_deviations_are_found_on_their_side_only() {
+    let data = planted();
+    let work = tempfile::tempdir().unwrap();
+    let mut failures = Vec::new();
+    for trial in ["fukuchi2018", "gaitkit_pd"] {
+        let subject = common::read_json(&data.join(trial).join("subject.json"));
+        let height = subject["leg_length_cm"].as_f64().unwrap() / 100.0 / 0.491;
+        let cases = common::read_json(&data.join(trial).join("cases.json"));
+        let baseline = visit(
+            &data.join(trial).join("none"),
+            height,
+            &work.path().join(trial).join("none"),
+        );
+        println!("{trial} none: present {baseline:?}");
+        // The Parkinson's walker's right steps are 27-32 % longer than the left in both side
+        // views of the unmodified trial: a real asymmetry, which the checklist reports.
+        let real: BTreeSet<String> = match trial {
+            "gaitkit_pd" => ["uneven_step_length (right)".to_string()].into(),
+            _ => BTreeSet::new(),
+        };
+        if baseline != real {
+            failures.push(format!(
+                "{trial} unmodified: {baseline:?}, expected {real:?}"
+            ));
+        }
+        for case in cases["written"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|c| c.as_str())
+        {
+            if case == "none" {
+                continue;
+            }
+            let found = visit(
+                &data.join(trial).join(case),
+                height,
+                &work.path().join(trial).join(case),
+            );
+            let item = item_of(case);
+            let on_right = found.contains(&format!("{item} (right)"));
+            let new_left: Vec<&String> = found
+                .iter()
+                .filter(|f| f.ends_with("(left)") && !baseline.contains(*f))
+                .collect();
+            println!(
+                "{trial} {case}: {item} on the right {on_right}; new on the left {new_left:?}; all {found:?}"
+            );
+            if !new_left.is_empty() {
+                failures.push(format!("{trial} {case}: on the left {new_left:?}"));
+            }
+            if REQUIRED.contains(&case) && !on_right {
+                failures.push(format!(
+                    "{trial} {case}: {item} not found on the right ({found:?})"
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// `(side, curve) -> means` of the sagittal rows of a visit_cycles.csv or a run's cycles.csv.
+fn curves(
+    path: &Path,
+    side_col: usize,
+    name_col: usize,
+    mean_col: usize,
+) -> std::collections::BTreeMap<(String, String), Vec<f64>> {
+    let mut out: std::collections::BTreeMap<(String, String), Vec<f64>> = Default::default();
+    let mut r = csv::Reader::from_path(path).unwrap();
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        if rec.len() > 6 && &rec[0] != "sagittal" {
+            continue;
+        }
+        out.entry((rec[side_col].to_string(), rec[name_col].to_string()))
+            .or_default()
+            .push(rec[mean_col].parse().unwrap_or(f64::NAN));
+    }
+    out
+}
+
+/// `gait visit` on the bundled sample (a left view: the walker's left side faces the camera)
+/// and its mirror image (as a right view): each side's curves come from the view where that
+/// limb is near the camera, equal to that pass's own curves; the visit report names them.
+#[test]
+fn a_visit_of_the_sample_and_its_mirror_takes_each_side_from_its_near_view() {
+    let work = tempfile::tempdir().unwrap();
+    let mirrored = work.path().join("mirrored.mp4");
+    let video = common::sample_video();
+    let status = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(&video)
+        .args(["-vf", "hflip", "-c:v", "libx264", "-crf", "12"])
+        .arg(&mirrored)
+        .status()
+        .expect("ffmpeg runs");
+    assert!(status.success());
+    let out = work.path().join("visit");
+    let o = run_ok(
+        gait()
+            .args(["visit", "--no-progress", "--left"])
+            .arg(&video)
+            .arg("--right")
+            .arg(&mirrored)
+            .arg("--out")
+            .arg(&out)
+            .args(["--set", "report.pdf=false", "--set", "report.overlay=false"]),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("visit of 2 pass(es) combined in"), "{err}");
+    let visit = curves(&out.join("visit_cycles.csv"), 1, 2, 4);
+    for (side, pass) in [("left", "1-left"), ("right", "2-right")] {
+        let own = curves(&out.join("passes").join(pass).join("cycles.csv"), 0, 1, 3);
+        for joint in ["hip", "knee", "ankle"] {
+            let key = (side.to_string(), joint.to_string());
+            let (a, b) = (&visit[&key], &own[&key]);
+            let d = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                d < 1e-3,
+                "{side} {joint}: visit differs from its pass by {d}"
+            );
+        }
+    }
+    // The mirror's right limb is the original's left limb seen from the other side: how close
+    // they come is printed (re-encoding alone moves events, BENCHMARKS.md "Robustness").
+    let original = curves(&out.join("passes/1-left/cycles.csv"), 0, 1, 3);
+    let mirror = curves(&out.join("passes/2-right/cycles.csv"), 0, 1, 3);
+    for joint in ["hip", "knee", "ankle"] {
+        let (a, b) = (
+            &original[&("left".into(), joint.into())],
+            &mirror[&("right".into(), joint.into())],
+        );
+        let rms =
+            (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt();
+        println!("{joint}: original left vs mirrored right, RMS {rms:.2} deg");
+    }
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        html.contains("left sagittal curves: left view (sports2d-demo.mp4) (near the camera)"),
+        "report names the sources"
+    );
+    assert!(html.contains("right sagittal curves: right view (mirrored.mp4) (near the camera)"));
+    assert!(html.contains("Amputee gait-deviation checklist"));
+}
+
+/// Progress across visits: the Parkinson's walk unmodified, then with the right hip hiking 10
+/// deg in swing. `gait progress` calls the change on hip hiking of the right side and nothing
+/// on the left.
+#[test]
+fn progress_calls_the_planted_change_and_nothing_on_the_other_side() {
+    let data = planted();
+    let work = tempfile::tempdir().unwrap();
+    let subject = common::read_json(&data.join("gaitkit_pd/subject.json"));
+    let height = subject["leg_length_cm"].as_f64().unwrap() / 100.0 / 0.491;
+    let before = work.path().join("none");
+    let after = work.path().join("hip_hike_10");
+    visit(&data.join("gaitkit_pd/none"), height, &before);
+    visit(&data.join("gaitkit_pd/hip_hike_10"), height, &after);
+    let out = work.path().join("progress");
+    let o = run_ok(
+        gait()
+            .arg("progress")
+            .arg(before.join("visit"))
+            .arg(after.join("visit"))
+            .arg("--out")
+            .arg(&out),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    let mut r = csv::Reader::from_path(out.join("progress.csv")).unwrap();
+    let calls: Vec<(String, String, String)> = r
+        .records()
+        .map(|x| x.unwrap())
+        .filter(|x| &x[7] == "change")
+        .map(|x| (x[0].to_string(), x[1].to_string(), x[4].to_string()))
+        .collect();
+    println!("{err}\n{calls:?}");
+    assert!(
+        calls.iter().any(|c| c.0 == "hip_hiking" && c.1 == "right"),
+        "{calls:?}"
+    );
+    assert!(
+        calls.iter().all(|c| c.1 == "right"),
+        "a change on the left: {calls:?}"
+    );
+    assert!(
+        std::fs::read_to_string(out.join("progress.html"))
+            .unwrap()
+            .contains("Progress across visits")
+    );
+}
