@@ -205,7 +205,12 @@ fn local_and_slurm_give_what_gait_run_gives_and_a_corrupt_video_fails_alone() {
             let dir = out.join("visits").join(visit);
             let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
             assert!(page.contains("Amputee gait-deviation checklist"), "{visit}");
-            assert!(page.contains("left sagittal curves: left view"), "{visit}");
+            // The pass is named with where each side's curves came from (these clips' left
+            // limbs have one accepted cycle, under min_cycles, so the left curves say none).
+            assert!(
+                page.contains("left view (clip_") && page.contains("sagittal curves:"),
+                "{visit}"
+            );
             assert!(dir.join("visit_checklist.csv").is_file(), "{visit}");
         }
         assert!(!out.join("visits/S03_1").exists());

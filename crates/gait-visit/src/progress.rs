@@ -5,7 +5,9 @@
 //! Rule: between consecutive visits a and b with means m, SDs s and counts n, the difference
 //! m_b - m_a is a change when it exceeds 1.96 x sqrt(s_a^2 / n_a + s_b^2 / n_b) (a two-sided
 //! 95 % test of the two means; a visit with a single cycle, whose SD is unknown, gives no
-//! call) and, where `gait-eval` has a minimal detectable change for the measure, that too.
+//! call) and the measure's floor ([`floor`]): the minimal detectable change of re-encoding
+//! and keypoint noise where the robustness matrix measured it, else the error of the measure
+//! under pose-model jitter.
 
 use std::path::{Path, PathBuf};
 
@@ -123,6 +125,28 @@ pub struct Change {
     pub call: String,
 }
 
+/// The smallest difference ever called a change for `item` in `unit`, and where it comes from.
+/// Step and stance times: their MDC95 on the bundled sample (gait-eval's reliability table).
+/// Angles: 2 deg, the frontal angles' error under BlazePose-level jitter on projected motion
+/// capture (1-2.6 deg, BENCHMARKS.md) and the sample's hip peak MDC95 (2.0-3.2 deg). Lengths:
+/// 2 cm, the step width's accuracy target (0.025 leg lengths without a scale).
+pub fn floor(item: &str, unit: &str) -> (f64, &'static str) {
+    let mdc = match item {
+        "uneven_step_time" => gait_eval::reliability::mdc("step_time", "s"),
+        "uneven_stance_time" => gait_eval::reliability::mdc("stance", "%"),
+        _ => None,
+    };
+    if let Some(m) = mdc {
+        return (m, "MDC95 of re-encoding and keypoint noise");
+    }
+    match unit {
+        "deg" => (2.0, "2 deg: the angles' error under pose-model jitter"),
+        "cm" => (2.0, "2 cm: the step width's accuracy"),
+        "leg" => (0.025, "0.025 leg lengths: the step width's accuracy"),
+        _ => (0.0, ""),
+    }
+}
+
 /// The changes between consecutive visits (in the order given) for every item and side both
 /// measured.
 pub fn changes(visits: &[VisitRecord]) -> Vec<Change> {
@@ -138,7 +162,7 @@ pub fn changes(visits: &[VisitRecord]) -> Vec<Change> {
             };
             let d = b.value - a.value;
             let se = (a.sd.powi(2) / a.n as f64 + b.sd.powi(2) / b.n as f64).sqrt();
-            let limit = 1.96 * se;
+            let limit = (1.96 * se).max(floor(&a.item, &a.unit).0);
             let call = if !limit.is_finite() || a.n < 2 || b.n < 2 {
                 "not judged: a visit with fewer than 2 cycles has no spread".to_string()
             } else if d.abs() > limit {
@@ -204,7 +228,7 @@ pub fn write(out: &Path, visits: &[VisitRecord]) -> Result<Vec<Change>, VisitErr
     })?;
     let subject = visits.first().map_or("", |v| v.label.subject.as_str());
     let mut html = format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Progress: {subject}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:24px auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:13px}}td.change{{font-weight:bold}}</style></head><body><h1>Progress across visits: {subject}</h1><p>Each checklist measure visit by visit (mean ± SD over its cycles, n cycles). A difference between two visits is called a change when it exceeds 1.96 × √(SD₁²/n₁ + SD₂²/n₂), the spread the cycles of the two visits alone could make; visits with one cycle are not judged.</p><table><tr><th>Item</th><th>Side</th>"
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Progress: {subject}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:24px auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:13px}}td.change{{font-weight:bold}}</style></head><body><h1>Progress across visits: {subject}</h1><p>Each checklist measure visit by visit (mean ± SD over its cycles, n cycles). A difference between two visits is called a change when it exceeds 1.96 × √(SD₁²/n₁ + SD₂²/n₂), the spread the cycles of the two visits alone could make, and the measure's floor: the minimal detectable change of re-encoding and keypoint noise for step and stance times, 2 deg for angles (their error under pose-model jitter), 2 cm for lengths; visits with one cycle are not judged.</p><table><tr><th>Item</th><th>Side</th>"
     );
     for v in visits {
         html.push_str(&format!("<th>{}</th>", v.name()));
@@ -306,21 +330,22 @@ mod tests {
         }
     }
 
-    /// 2 deg apart with SDs of 1 deg over 4 cycles each: 1.96 x sqrt(1/4 + 1/4) = 1.39 deg, a
-    /// change; over 2 cycles each the limit is 1.96 deg, still one; with SDs of 2 deg it is not.
+    /// 2.5 deg apart with SDs of 1 deg over 4 cycles each: 1.96 x sqrt(1/4 + 1/4) = 1.39 deg,
+    /// under the 2 deg floor, so the floor decides: a change; with SDs of 2 deg over 2 cycles
+    /// the limit is 3.92 deg: none; a difference under the floor is none however small the SDs.
     #[test]
-    fn a_change_must_exceed_the_spread_of_the_cycles() {
+    fn a_change_must_exceed_the_spread_of_the_cycles_and_the_floor() {
         let calls = |a: VisitRecord, b: VisitRecord| changes(&[a, b])[0].call.clone();
         assert_eq!(
-            calls(visit("1", 3.0, 1.0, 4), visit("2", 5.0, 1.0, 4)),
+            calls(visit("1", 3.0, 1.0, 4), visit("2", 5.5, 1.0, 4)),
             "change"
         );
         assert_eq!(
-            calls(visit("1", 3.0, 1.0, 2), visit("2", 5.0, 1.0, 2)),
-            "change"
+            calls(visit("1", 3.0, 2.0, 2), visit("2", 5.5, 2.0, 2)),
+            "no change"
         );
         assert_eq!(
-            calls(visit("1", 3.0, 2.0, 2), visit("2", 5.0, 2.0, 2)),
+            calls(visit("1", 3.0, 0.01, 4), visit("2", 4.5, 0.01, 4)),
             "no change"
         );
         assert!(

@@ -123,8 +123,27 @@ fn measure(f: &Frame, side: Side, view: View) -> [f64; 4] {
     out
 }
 
+/// The frontal angles move at the stride's frequency and its first harmonics (a pelvis drops
+/// and rises once a stride), slower than the feet whose keypoints the 6 Hz keypoint filter is
+/// set for; a pose model's jitter on two hips 40 px apart tilts their line by degrees. So the
+/// angles are low-passed again at this cutoff (zero-phase Butterworth, order 2).
+pub const CUTOFF_HZ: f64 = 3.0;
+
 /// Every frame's measures, both sides.
 pub fn compute(t: &Tracks, view: View) -> FrontalAngles {
+    let mut a = raw(t, view);
+    let filter = crate::butterworth::Butterworth {
+        order: 2,
+        cutoff_hz: CUTOFF_HZ,
+    };
+    for series in a.left.iter_mut().chain(a.right.iter_mut()) {
+        crate::smooth::smooth_segments(&filter, series, t.fps);
+    }
+    a
+}
+
+/// The measures of each frame as its keypoints give them.
+fn raw(t: &Tracks, view: View) -> FrontalAngles {
     let n = t.len();
     let mut out = FrontalAngles {
         left: std::array::from_fn(|_| vec![f64::NAN; n]),
