@@ -71,7 +71,20 @@ impl Checklist {
             } else {
                 String::new()
             };
-            let cycles: Vec<String> = v.cycles.iter().map(usize::to_string).collect();
+            let mut cycles = v
+                .cycles
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ");
+            if let (Status::Present, Some(f)) = (v.status, v.frames.first()) {
+                // The page of `gait review` opens where the deviation shows most in the first
+                // cycle that has it.
+                cycles.push_str(&format!(
+                    "<br><code>gait review {} --frame {f}</code>",
+                    escape(&v.run)
+                ));
+            }
             let from = sources
                 .and_then(|s| s.get(i))
                 .map_or(String::new(), |s| format!("<td>{}</td>", escape(s)));
@@ -82,7 +95,7 @@ impl Checklist {
                 side_name(v.side),
                 escape(v.item.measure),
                 if v.source.is_empty() { String::new() } else { format!("; threshold: {}", escape(&v.source)) },
-                cycles.join(", ")
+                cycles
             ));
         }
         out.push_str("</tbody></table>");
