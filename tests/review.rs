@@ -449,7 +449,11 @@ fn a_back_view_shows_its_frontal_measures_and_takes_corrections() {
         "150".as_ref(),
         "--corrections".as_ref(),
         file.as_os_str(),
+        "--frame".as_ref(),
+        "300".as_ref(),
     ]);
+    // The page opens at the frame asked for (a checklist names `gait review RUN --frame N`).
+    assert!(server.url.ends_with("&frame=300"), "{}", server.url);
     let (status, body) = server.get("/api/analysis");
     assert_eq!(status, 200, "{body}");
     let an: serde_json::Value = serde_json::from_str(&body).unwrap();

@@ -21,6 +21,7 @@ from gait._gait import (
 )
 from gait._config import Config
 from gait._run import Run, kin, load, run
+from gait._visit import Visit, visit, visit_runs
 
 __all__ = [
     "Config",
@@ -30,8 +31,11 @@ __all__ = [
     "OutputError",
     "Run",
     "StageError",
+    "Visit",
     "__version__",
     "kin",
     "load",
     "run",
+    "visit",
+    "visit_runs",
 ]

@@ -6,6 +6,7 @@
 mod errors;
 mod run;
 mod tables;
+mod visit;
 
 use pyo3::prelude::*;
 
@@ -17,5 +18,6 @@ fn _gait(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run::kin, m)?)?;
     m.add_function(wrap_pyfunction!(run::resolve_config, m)?)?;
     m.add_function(wrap_pyfunction!(run::default_models_dir, m)?)?;
+    m.add_function(wrap_pyfunction!(visit::visit, m)?)?;
     Ok(())
 }

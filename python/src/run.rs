@@ -117,7 +117,7 @@ pub(crate) fn kin<'py>(
     Ok(result)
 }
 
-fn load(path: Option<PathBuf>, sets: &[String]) -> PyResult<PipelineConfig> {
+pub(crate) fn load(path: Option<PathBuf>, sets: &[String]) -> PyResult<PipelineConfig> {
     PipelineConfig::load(path.as_deref(), sets).map_err(to_py)
 }
 

@@ -180,3 +180,26 @@ def test_config_sets_a_python_stage_in_one_call(gait):
     assert 'kind = "python"' in text and 'module = "gait_test_constant"' in text
     with pytest.raises(gait.ConfigError):
         gait.Config.load().set("pose.kind", "python")
+
+
+def test_visit_runs_combines_a_front_and_a_side_view(gait, tmp_path):
+    """gait.visit_runs (issue 39): the Parkinson's walk seen from the front and from its right
+    side, each through gait.kin, combined into one visit with its checklist as DataFrames."""
+    data = ROOT / "tests" / "data"
+    front = gait.kin(read_dlc(data / "frontal" / "gaitkit_pd_anterior" / "keypoints.csv"), fps=150,
+                     out=tmp_path / "front", set={"kinematics.view": "anterior"})
+    side = gait.kin(read_dlc(data / "gaitkit_pd" / "keypoints.csv"), fps=150,
+                    out=tmp_path / "side", set={"kinematics.view": "right"})
+    v = gait.visit_runs(tmp_path / "visit", [("anterior", front), ("right", side)],
+                        set={"kinematics.prosthetic_side": "right"}, subject="PD", session="1")
+    assert v.report.is_file() and len(v.passes) == 2
+    rows = v.checklist.set_index(["item", "side"])
+    # Each item from the view that judges it: frontal items from the front, knee from the side.
+    assert rows.loc[("hip_hiking", "right"), "verdict"] in ("present", "absent")
+    assert "anterior view" in rows.loc[("hip_hiking", "right"), "pass"]
+    assert rows.loc[("excessive_knee_flexion_stance", "right"), "verdict"] in ("present", "absent")
+    assert "right view" in rows.loc[("excessive_knee_flexion_stance", "right"), "pass"]
+    assert set(v.cycles["plane"]) == {"sagittal", "frontal"}
+    assert (v.spatiotemporal["parameter"] == "stride_time").any()
+    with pytest.raises(gait.InputError, match="view `sideways`"):
+        gait.visit_runs(tmp_path / "bad", [("sideways", front)])

@@ -51,7 +51,17 @@ impl Checklist {
             "<h2 id=\"checklist\">Amputee gait-deviation checklist</h2><p>Each item of the observational checklists (Berger 1992; Northwestern University Prosthetic-Orthotic Center) judged by a measure against a threshold with its source, per side. {}. This is a measurement, not a diagnosis. Also in checklist.csv.</p><table><thead><tr><th>Item</th><th>Side</th><th>Verdict</th><th>Value ± SD</th><th>Threshold</th><th>Measure and source</th><th>Cycles (first frames)</th>{from_head}</tr></thead><tbody>",
             escape(&level)
         );
+        // Items that cannot be judged here are listed by reason under the table, not as rows.
+        let mut unjudged: Vec<(String, Vec<String>)> = Vec::new();
         for (i, v) in rows {
+            if v.status == Status::NotAssessable {
+                let name = format!("{} ({})", v.item.name, v.side.name());
+                match unjudged.iter_mut().find(|(r, _)| *r == v.reason) {
+                    Some((_, names)) => names.push(name),
+                    None => unjudged.push((v.reason.clone(), vec![name])),
+                }
+                continue;
+            }
             let other_level = self
                 .amputation
                 .as_deref()
@@ -71,7 +81,20 @@ impl Checklist {
             } else {
                 String::new()
             };
-            let cycles: Vec<String> = v.cycles.iter().map(usize::to_string).collect();
+            let mut cycles = v
+                .cycles
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ");
+            if let (Status::Present, Some(f)) = (v.status, v.frames.first()) {
+                // The page of `gait review` opens where the deviation shows most in the first
+                // cycle that has it.
+                cycles.push_str(&format!(
+                    "<br><code>gait review {} --frame {f}</code>",
+                    escape(&v.run)
+                ));
+            }
             let from = sources
                 .and_then(|s| s.get(i))
                 .map_or(String::new(), |s| format!("<td>{}</td>", escape(s)));
@@ -82,10 +105,21 @@ impl Checklist {
                 side_name(v.side),
                 escape(v.item.measure),
                 if v.source.is_empty() { String::new() } else { format!("; threshold: {}", escape(&v.source)) },
-                cycles.join(", ")
+                cycles
             ));
         }
         out.push_str("</tbody></table>");
+        if !unjudged.is_empty() {
+            out.push_str("<p>Not assessable here:</p><ul>");
+            for (reason, names) in unjudged {
+                out.push_str(&format!(
+                    "<li>{}: {}</li>",
+                    escape(&reason),
+                    escape(&names.join(", "))
+                ));
+            }
+            out.push_str("</ul>");
+        }
         out
     }
 }

@@ -73,6 +73,7 @@ pub fn judge(
         cycles: hits.iter().map(|s| s.first).collect(),
         frames: hits.iter().map(|s| s.frame).collect(),
         reason: String::new(),
+        run: String::new(),
     }
 }
 

@@ -109,6 +109,10 @@ pub fn assess(
             ));
         }
     }
+    let here = dir.display().to_string();
+    for v in &mut verdicts {
+        v.run.clone_from(&here);
+    }
     Ok(Checklist {
         view: run.view,
         prosthetic,

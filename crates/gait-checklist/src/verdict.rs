@@ -64,6 +64,8 @@ pub struct Verdict {
     pub frames: Vec<usize>,
     /// Why it is not assessable.
     pub reason: String,
+    /// The run folder the frames are in (`gait review RUN --frame N` opens one).
+    pub run: String,
 }
 
 impl Verdict {
@@ -84,6 +86,7 @@ impl Verdict {
             cycles: Vec::new(),
             frames: Vec::new(),
             reason: reason.into(),
+            run: String::new(),
         }
     }
 }

@@ -522,7 +522,9 @@
     sc.min = S.first; sc.max = S.last;
     drawSubject();
     wire();
-    setFrame(S.an.bouts.length ? S.an.bouts[0].first : S.first);
+    // `gait review RUN --frame N` (a checklist's frame) opens at that frame.
+    const asked = Number(new URLSearchParams(location.search).get('frame'));
+    setFrame(Number.isFinite(asked) && asked > 0 ? asked : (S.an.bouts.length ? S.an.bouts[0].first : S.first));
     drawLists();
     updateUndo();
     setStatus(`${S.run.frames.length} frames; corrections are saved to ${S.run.corrections_path} after each change`, 'ok');

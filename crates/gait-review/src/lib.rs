@@ -30,6 +30,8 @@ pub struct ServeOptions {
     pub port: Option<u16>,
     /// Launch the system's browser on the page.
     pub open: bool,
+    /// The frame the page opens at (a checklist's frame), else the first walking bout's.
+    pub frame: Option<usize>,
 }
 
 fn token() -> Result<String, ReviewError> {
@@ -81,7 +83,8 @@ pub fn serve(src: ReviewSource, opts: &ServeOptions) -> Result<(), ReviewError> 
             context: "reading the server's address".into(),
             source: e,
         })?;
-        let url = format!("http://{addr}/?token={}", app.token);
+        let at = opts.frame.map_or(String::new(), |f| format!("&frame={f}"));
+        let url = format!("http://{addr}/?token={}{at}", app.token);
         println!("{url}");
         let _ = std::io::stdout().flush();
         eprintln!(

@@ -34,6 +34,9 @@ pub struct Args {
     /// Open the page in the system browser
     #[arg(long)]
     open: bool,
+    /// Open at this frame (e.g. one the checklist names) [default: the first walking bout's]
+    #[arg(long, value_name = "N")]
+    frame: Option<usize>,
 }
 
 pub fn execute(args: Args) -> Result<(), CliError> {
@@ -71,6 +74,7 @@ pub fn execute(args: Args) -> Result<(), CliError> {
     let opts = ServeOptions {
         port: args.port,
         open: args.open,
+        frame: args.frame,
     };
     gait_review::serve(src, &opts).map_err(fail)
 }
