@@ -6,7 +6,7 @@ import tempfile
 
 from gait import _gait
 from gait._config import as_sets
-from gait._run import _config, load, read_csv, run
+from gait._run import Run, _config, read_csv, run
 
 VIEWS = ("left", "right", "anterior", "posterior")
 
@@ -47,12 +47,10 @@ def visit_runs(out, runs, config=None, set=None, subject="", session="", date=""
     """Combines earlier runs of one session: runs is a list of (view, run folder or gait.Run),
     view one of left, right, anterior, posterior."""
     path, sets = _config(config, set)
-    passes = []
-    for view, r in runs:
-        folder = pathlib.Path(getattr(r, "dir", r))
-        passes.append((view, os.fspath(folder), os.fspath(folder)))
+    given = [(view, r if isinstance(r, Run) else Run(r)) for view, r in runs]
+    passes = [(view, os.fspath(r.dir), os.fspath(r.dir)) for view, r in given]
     _gait.visit(os.fspath(out), passes, path, sets, subject, session, date)
-    return Visit(out, [load(p[2]) for p in passes])
+    return Visit(out, [r for _, r in given])
 
 
 def visit(out=None, left=(), right=(), anterior=(), posterior=(), config=None, set=None,

@@ -100,12 +100,12 @@ def test_kin_on_the_runs_keypoints_gives_its_angles(clip_run, gait):
         ),
         # A front view (issue 38): the frontal tables as DataFrames too.
         (
-            ROOT / "tests" / "data" / "frontal" / "fukuchi2018_anterior" / "keypoints.csv",
+            ROOT / "tests" / "data" / "frontal" / "gaitkit_pd_anterior" / "keypoints.csv",
             150,
             read_dlc,
         ),
     ],
-    ids=["sample-subject", "fukuchi2018", "fukuchi2018-anterior"],
+    ids=["sample-subject", "fukuchi2018", "gaitkit-pd-anterior"],
 )
 def test_kin_equals_the_kin_command(gait, tmp_path, keypoints_csv, fps, read):
     """gait.kin on a DeepLabCut table writes the files `gait kin` writes, and its tables are theirs."""
