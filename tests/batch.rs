@@ -214,6 +214,11 @@ fn local_and_slurm_give_what_gait_run_gives_and_a_corrupt_video_fails_alone() {
             assert!(dir.join("visit_checklist.csv").is_file(), "{visit}");
         }
         assert!(!out.join("visits/S03_1").exists());
+        // S01's two sessions: its progress, linked from the cohort page with the visits.
+        assert!(out.join("progress/S01/progress.html").is_file());
+        assert!(
+            html.contains("Visits and progress") && html.contains("progress/S01/progress.html")
+        );
         let status = gait()
             .args(["batch", "status"])
             .arg(out)

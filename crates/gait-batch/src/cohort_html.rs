@@ -78,7 +78,11 @@ fn figure(curves: &[CycleCurve], normative: Option<&gait_eval::Normative>) -> St
 }
 
 /// The page.
-pub fn html(rows: &[CohortRow], normative: Option<&gait_eval::Normative>) -> String {
+pub fn html(
+    rows: &[CohortRow],
+    normative: Option<&gait_eval::Normative>,
+    visits: &[crate::visits::Written],
+) -> String {
     // subject -> view -> each video's curves (both sides).
     let mut by: BTreeMap<(String, String), BTreeMap<String, Vec<CycleCurve>>> = BTreeMap::new();
     for r in rows.iter().filter(|r| !r.curves.is_empty()) {
@@ -105,6 +109,24 @@ pub fn html(rows: &[CohortRow], normative: Option<&gait_eval::Normative>) -> Str
             .len(),
         failed.len()
     );
+    if !visits.is_empty() {
+        s.push_str("<h2>Visits and progress</h2><table><tr><th>visit</th><th>deviations present / changes</th></tr>");
+        for v in visits {
+            let found = if v.found.is_empty() {
+                "none".to_string()
+            } else {
+                v.found.join(", ")
+            };
+            let _ = write!(
+                s,
+                "<tr><td><a href=\"{}\">{}</a></td><td>{}</td></tr>",
+                v.page,
+                escape(&v.what),
+                escape(&found)
+            );
+        }
+        s.push_str("</table>");
+    }
     if !failed.is_empty() {
         s.push_str("<h2>Videos without results</h2><table><tr><th>run</th><th>status</th><th>why</th></tr>");
         for r in &failed {

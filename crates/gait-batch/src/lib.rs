@@ -35,13 +35,15 @@ pub fn aggregate(out: &Path, plan: &Plan) -> Result<usize, BatchError> {
             .map_err(|e| BatchError::io(format!("writing {}", path.display()), e))
     };
     write("cohort.csv", cohort::csv(&rows).as_bytes())?;
+    // Rows of one subject and session with their views make a visit; two visits, progress.
+    let visits = visits::write(out, plan, &rows)?;
     let normative = gait_eval::report_config::ReportConfig::default()
         .load_normative()
         .ok()
         .flatten();
     write(
         "cohort.html",
-        cohort_html::html(&rows, normative.as_ref()).as_bytes(),
+        cohort_html::html(&rows, normative.as_ref(), &visits).as_bytes(),
     )?;
     let mut failed: Vec<&str> = rows
         .iter()
@@ -49,7 +51,5 @@ pub fn aggregate(out: &Path, plan: &Plan) -> Result<usize, BatchError> {
         .map(|r| r.row.name.as_str())
         .collect();
     failed.dedup();
-    // Rows of one subject and session with their views make a visit.
-    visits::write(out, plan, &rows)?;
     Ok(failed.len())
 }
