@@ -57,6 +57,9 @@ def test_ctrl_c_stops_the_run_and_a_rerun_resumes(clip_run, video, tmp_path):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # A suite started in the background by a non-interactive shell inherits SIGINT ignored,
+        # and Python then installs no Ctrl-C handler; a user's terminal never does that.
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         wait_for_pose_frames(proc, out)
