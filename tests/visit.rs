@@ -8,6 +8,10 @@
 
 mod common;
 
+#[path = "../crates/gait-kin/tests/rng/mod.rs"]
+mod rng;
+use rng::Rng;
+
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
@@ -299,22 +303,6 @@ fn progress_calls_the_planted_change_and_nothing_on_the_other_side() {
     );
 }
 
-/// Deterministic xorshift normals (Box-Muller).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn normal(&mut self) -> f64 {
-        let u = (self.next() >> 11) as f64 / (1u64 << 53) as f64 + 1e-12;
-        let v = (self.next() >> 11) as f64 / (1u64 << 53) as f64;
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
-
 /// A case's four views as 30 fps videos (every 5th frame) with BlazePose-level jitter: 1 px
 /// per 100 px of leg on every keypoint (measured on the sample, see
 /// crates/gait-kin/tests/frontal_mocap.rs).
@@ -322,7 +310,7 @@ fn noisy_copy(case: &Path, to: &Path, seed: u64) {
     for view in VIEWS {
         let f = std::fs::File::open(case.join(view).join("keypoints.csv")).unwrap();
         let seq = gait_core::dlc::read(f, None, 150.0).unwrap();
-        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0xD1B5_4A32_D192_ED03));
+        let mut rng = Rng::seeded(seed);
         let mut out = seq.clone();
         out.poses = seq.poses.iter().step_by(5).cloned().collect();
         out.frames = (0..out.poses.len()).collect();

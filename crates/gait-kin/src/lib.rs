@@ -23,6 +23,7 @@
 pub mod angles;
 pub mod bouts;
 pub mod butterworth;
+mod chain;
 pub mod collapse;
 pub mod config;
 pub mod corrections;
@@ -261,54 +262,22 @@ fn run_chain(
     let angles = angles::compute(t, &dirs.per_frame);
     feet::warn_missing_toes(t, &mut warnings);
 
-    let bouts = match &frontal_scale {
-        Some(scale) => frontal::bouts::find(t, view.view, scale, kin),
-        None => bouts::find(
-            &bouts::Frames {
-                clean: t,
-                gated: &c.gated,
-                dirs: &dirs.per_frame,
-                max_gap: post.max_gap(fps),
-            },
-            kin,
-        ),
-    };
+    let bouts = chain::bouts(&c, &dirs, frontal_scale.as_ref(), view.view, post, kin);
     // Detected events count only where the subject walks; a user's events file says itself
     // where that is, unless bouts are given by hand too.
     let enforce_bouts = kin.events_csv.is_none() || kin.bouts.is_some();
-    if n > 0 && bouts.is_empty() {
-        warnings.push(if enforce_bouts {
-            "no walking bout found: no events or cycles".into()
-        } else {
-            "no walking bout found: the events of events_csv are used as given".into()
-        });
-    }
+    chain::warn_no_bout(n, &bouts, enforce_bouts, &mut warnings);
     let event_keypoints = feet::event_keypoints(t, kin, &mut warnings);
-    let (mut events, event_margins, from_file) = match (&kin.events_csv, &frontal_scale) {
-        (Some(p), _) => (events::read_csv(p)?, Vec::new(), true),
-        (None, Some(scale)) => {
-            let (ev, margins) = frontal::events::detect(t, scale, kin.min_stride_s);
-            (ev, margins, false)
-        }
-        (None, None) => {
-            let (ev, margins) = steps.events.detect_with_margins(t, &dirs.per_frame);
-            (ev, margins, false)
-        }
-    };
-    if enforce_bouts {
-        events.retain(|e| bouts::bout_of(&bouts, e.frame).is_some());
-    }
-    if let Some(g) = &corr {
-        corrections::apply_events(&g.corrections, &mut events, &g.path)?;
-    }
-    for side in Side::BOTH {
-        if !events
-            .iter()
-            .any(|e| e.side == side && e.event == EventKind::HeelStrike)
-        {
-            warnings.push(format!("no heel strike found for the {} leg", side.name()));
-        }
-    }
+    let (events, event_margins, from_file) = chain::events(
+        t,
+        &dirs,
+        frontal_scale.as_ref(),
+        steps,
+        kin,
+        (&bouts, enforce_bouts),
+        corr.as_ref().map(|g| (&g.corrections, g.path.as_path())),
+        &mut warnings,
+    )?;
     let strides = cycles::strides(&events, fps, kin.min_stride_s, kin.max_stride_s);
     let evidence = quality::Evidence {
         clean: t,

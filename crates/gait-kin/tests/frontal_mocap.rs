@@ -13,6 +13,9 @@
 //!
 //! Figures are printed (`cargo test -p gait-kin --test frontal_mocap -- --nocapture`).
 
+mod rng;
+use rng::Rng;
+
 use std::path::PathBuf;
 
 use gait_core::PoseSequence;
@@ -304,26 +307,10 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
 /// too. The noisy runs take 1.5 px per 100 px of leg at each keypoint, frame by frame.
 const NOISE_PER_100_LEG_PX: f64 = 1.0;
 
-/// Deterministic xorshift normals (Box-Muller).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn normal(&mut self) -> f64 {
-        let u = (self.next() >> 11) as f64 / (1u64 << 53) as f64 + 1e-12;
-        let v = (self.next() >> 11) as f64 / (1u64 << 53) as f64;
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
-
 /// The 150 Hz trial seen as a 30 fps video (every 5th frame, numbered 0, 1, ...) with
 /// pose-model jitter added.
 fn as_video(seq: &PoseSequence, seed: u64) -> PoseSequence {
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0xD1B5_4A32_D192_ED03));
+    let mut rng = Rng::seeded(seed);
     let mut out = seq.clone();
     out.poses = seq.poses.iter().step_by(5).cloned().collect();
     out.frames = (0..out.poses.len()).collect();

@@ -1,6 +1,9 @@
 //! Real motion capture: Fukuchi et al. 2018 (CC-BY 4.0), one overground trial at 150 Hz, projected
 //! onto the sagittal plane by tools/kin/derive_fukuchi.py (see tests/data/fukuchi2018/README.md).
 
+mod rng;
+use rng::Rng;
+
 use std::path::PathBuf;
 
 use gait_core::PoseSequence;
@@ -241,26 +244,6 @@ fn mirrored_walk_gives_the_same_angles_and_events() {
     }
 }
 
-/// Deterministic xorshift generator, so the injected swaps are reproducible.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-    /// Standard normal (Box-Muller).
-    fn normal(&mut self) -> f64 {
-        let u = (self.next() >> 11) as f64 / (1u64 << 53) as f64 + 1e-12;
-        let v = (self.next() >> 11) as f64 / (1u64 << 53) as f64;
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
-
 /// Injects single frames and runs of 2..=30 frames of swapped leg labels at random places, then
 /// scores detection frame by frame. `noise_px` adds Gaussian jitter (pose-estimator-like);
 /// `step` keeps every step-th frame (5: the 150 Hz capture seen as 30 fps video).
@@ -271,7 +254,7 @@ fn swap_scores(noise_px: f64, trials: u64, step: usize) -> (f64, f64) {
     seq.fps /= step as f64;
     let (mut tp, mut fp, mut fn_) = (0usize, 0usize, 0usize);
     for seed in 1..=trials {
-        let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0xD1B5_4A32_D192_ED03));
+        let mut rng = Rng::seeded(seed);
         let mut t = Tracks::from_sequence(&seq);
         if noise_px > 0.0 {
             for j in 0..t.names.len() {
