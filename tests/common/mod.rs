@@ -135,3 +135,13 @@ pub fn tool_output(script: &str, args: &[&str]) -> String {
     );
     String::from_utf8(out.stdout).unwrap().trim().to_string()
 }
+
+/// No output file that looks complete in `out` (bad input stopped the run before any).
+pub fn assert_no_results(out: &Path) {
+    for f in ["keypoints.csv", "run.json"] {
+        assert!(
+            !out.join(f).exists(),
+            "{f} must not exist after a failed run"
+        );
+    }
+}
