@@ -8,7 +8,15 @@ use serde::{Deserialize, Serialize};
 /// Mean colour of the torso and of the legs, each as RGB in [0, 1]; `NaN`
 /// where the region lies outside the image.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Appearance(pub [f32; 6]);
+pub struct Appearance(#[serde(deserialize_with = "nan_as_null")] pub [f32; 6]);
+
+/// JSON writes `NaN` as `null`; read it back as `NaN`, so that a cached frame
+/// with a body part outside the image is not taken for a damaged entry (and
+/// detected again on every rerun).
+fn nan_as_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f32; 6], D::Error> {
+    let v: [Option<f32>; 6] = Deserialize::deserialize(d)?;
+    Ok(v.map(|x| x.unwrap_or(f32::NAN)))
+}
 
 /// Samples per region side: enough for a mean colour, cheap on full-HD frames.
 const GRID: usize = 8;
@@ -112,6 +120,15 @@ fn region(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_region_outside_the_image_survives_json() {
+        let a = Appearance([0.5, f32::NAN, 0.2, 0.1, 0.3, f32::NAN]);
+        let json = serde_json::to_string(&a).unwrap();
+        let back: Appearance = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.distance(&a), Some(0.0));
+        assert!(back.0[1].is_nan() && back.0[5].is_nan());
+    }
     use image::Rgb;
 
     #[test]

@@ -41,6 +41,15 @@ pub struct LinkLimits {
 /// down on a half-hidden body): they are not linked into any track.
 const MAX_TILT: f32 = std::f32::consts::FRAC_PI_4;
 
+/// The cost of a track going unseen for `short_gap_frames` (a link costs
+/// about 0.1-1 otherwise: distance over reach, size change, colour).
+const UNSEEN_COST: f32 = 0.3;
+
+/// Two tracks are one person only when their boxes coincide in at least this
+/// many frames (or in every frame of the shorter one): a single shared frame
+/// is a chance, e.g. where the walker passes in front of someone.
+const MIN_SHARED: usize = 3;
+
 impl Track {
     fn last(&self) -> &Sighting {
         &self.sightings[self.sightings.len() - 1]
@@ -98,7 +107,11 @@ impl Track {
         if dt > limits.short_gap_frames && colour.is_none_or(|c| c > limits.max_colour_distance) {
             return None;
         }
-        Some(d / reach + ratio + 4.0 * colour.unwrap_or(0.0))
+        // A track seen a moment ago is the likelier owner of a sighting than
+        // one unseen for a while whose prediction happens to land there too
+        // (two tracks on one walker otherwise take her frames in turn).
+        let unseen = (dt - 1) as f32 / limits.short_gap_frames.max(1) as f32;
+        Some(d / reach + ratio + 4.0 * colour.unwrap_or(0.0) + UNSEEN_COST * unseen)
     }
 }
 
@@ -152,15 +165,20 @@ fn upright(s: &Sighting) -> bool {
 /// returns a second box on the same body (another size, half the body), and
 /// the linker then starts a second track that takes over from the first one
 /// (e.g. where the person turns and the first track's prediction misses).
-/// Two tracks are joined when they overlap in time, their boxes coincide
-/// (centres within a third of the body size) in every frame both are seen,
-/// and their colours match.
+/// Two tracks are joined when they overlap in time, both are seen in at
+/// least half the frames where either is seen over that time, their boxes
+/// coincide (centres within a third of the body size) in every frame both
+/// are seen, and their colours match. Also joined: a track that starts
+/// within a detector miss of another's end, where that one was heading, in
+/// its colours, at up to twice the size ratio a link allows (the detector's
+/// size of a walker jumps where she turns or her arms swing wide).
 pub fn stitch(mut tracks: Vec<Track>, limits: &LinkLimits) -> Vec<Track> {
     let mut i = 0;
     while i < tracks.len() {
         let mut j = i + 1;
         while j < tracks.len() {
-            if same_person(&tracks[i], &tracks[j], limits) {
+            let (a, b) = (&tracks[i], &tracks[j]);
+            if same_person(a, b, limits) || continues(a, b, limits) || continues(b, a, limits) {
                 let other = tracks.remove(j);
                 merge(&mut tracks[i], other);
                 j = i + 1;
@@ -187,7 +205,43 @@ fn same_person(a: &Track, b: &Track, limits: &LinkLimits) -> bool {
         shared += 1;
     }
     let colours = a.appearance().distance(&b.appearance());
-    shared > 0 && colours.is_some_and(|c| c <= limits.max_colour_distance)
+    let shorter = a.sightings.len().min(b.sightings.len());
+    // One body seen twice gives two boxes in most frames where both tracks
+    // run; two people meet for a few frames of a long common span.
+    let (first, last) = (
+        a.sightings[0].frame.max(b.sightings[0].frame),
+        a.last().frame.min(b.last().frame),
+    );
+    let in_span = |t: &Track| {
+        t.sightings
+            .iter()
+            .filter(|s| (first..=last).contains(&s.frame))
+            .count()
+    };
+    let either = in_span(a) + in_span(b) - shared;
+    shared >= MIN_SHARED.min(shorter)
+        && 2 * shared >= either
+        && colours.is_some_and(|c| c <= limits.max_colour_distance)
+}
+
+/// Whether `b` takes over where `a` ended (see [`stitch`]).
+fn continues(a: &Track, b: &Track, limits: &LinkLimits) -> bool {
+    let (end, start) = (a.last(), &b.sightings[0]);
+    if start.frame <= end.frame || start.frame - end.frame > limits.short_gap_frames + 1 {
+        return false;
+    }
+    let size = a.size().max(1.0);
+    let p = a.predict(start.frame);
+    let d = (p[0] - start.person.centre[0]).hypot(p[1] - start.person.centre[1]) / size;
+    let reach = 0.2 + 0.04 * (start.frame - end.frame) as f32;
+    let early = Track {
+        sightings: b.sightings.iter().take(5).copied().collect(),
+    };
+    let ratio = (early.size().max(1.0) / size).ln().abs();
+    let colours = a.appearance().distance(&b.appearance());
+    d <= reach
+        && ratio <= 2.0 * limits.max_size_ratio.ln()
+        && colours.is_some_and(|c| c <= limits.max_colour_distance)
 }
 
 /// `b`'s sightings added to `a`; where both saw the person, `a`'s stay.
