@@ -1,0 +1,54 @@
+//! The subject pass on the real people of the sample and of three re-encodings
+//! (tests/data/subject): the walker is followed through the same frames
+//! whatever the encoding, and never swapped for the man she passes.
+
+use gait_core::PersonChoice;
+use gait_subject::{Sighting, SubjectConfig, find};
+
+fn sightings(name: &str) -> Vec<(usize, Vec<Sighting>)> {
+    let path = format!(
+        "{}/../../tests/data/subject/{name}.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+/// The walker's track: (first frame, last frame, frames in view after bridging).
+fn walker(name: &str) -> (usize, usize, usize) {
+    let frames = sightings(name);
+    let s = find(
+        &frames,
+        PersonChoice::default(),
+        &SubjectConfig::default(),
+        30.0,
+        (1920, 1080),
+    )
+    .unwrap();
+    let t = &s.tracks[s.chosen];
+    // The man on the box is bigger (about 1.3-1.6 times) and his hips higher:
+    // none of his sightings may be in her track.
+    let man = t
+        .sightings
+        .iter()
+        .filter(|x| x.person.centre[1] < 620.0 && x.person.size() > 1100.0)
+        .count();
+    assert_eq!(man, 0, "{name}: the man's sightings in the walker's track");
+    (t.first_frame, t.last_frame, s.boxes.len())
+}
+
+#[test]
+fn the_walker_is_followed_the_same_on_every_encoding() {
+    let (first, last, n) = walker("original");
+    assert!(
+        first == 59 && last == 192 && n > 120,
+        "original: {first}-{last}, {n} frames"
+    );
+    for name in ["crf23", "hevc_mov", "mirrored"] {
+        let (f, l, m) = walker(name);
+        assert!(
+            f.abs_diff(first) <= 2 && l.abs_diff(last) <= 3 && m + 8 >= n,
+            "{name}: walker {f}-{l} in {m} frames; the original {first}-{last} in {n}"
+        );
+    }
+}
