@@ -53,6 +53,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    gait_pipeline::timings::mark_process_start();
     let cli = Cli::parse();
     let models_dir = commands::models_dir(cli.models_dir);
     let result: Result<(), CliError> = match cli.command {

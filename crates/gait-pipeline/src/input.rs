@@ -33,6 +33,19 @@ pub struct InputInfo {
     kind: Kind,
     /// What the decoder had to say about damaged but readable stills (shared by the readers).
     decode_warnings: DecodeWarnings,
+    /// Time the readers waited for decoded frames (shared by the readers).
+    reading: ReadClock,
+}
+
+/// Nanoseconds spent in [`FrameReader::next_frame`], over every reader of one input.
+#[derive(Debug, Clone, Default)]
+struct ReadClock(std::sync::Arc<std::sync::atomic::AtomicU64>);
+
+impl PartialEq for ReadClock {
+    /// Time spent reading does not make two inputs different.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// Warnings of every reader of one input, e.g. a JPEG cut short ("Premature end of JPEG file").
@@ -150,7 +163,13 @@ impl InputInfo {
             orientations,
             kind: Kind::Images(files),
             decode_warnings: DecodeWarnings::default(),
+            reading: ReadClock::default(),
         })
+    }
+
+    /// Seconds every reader of this input has waited for decoded frames so far.
+    pub fn seconds_reading(&self) -> f64 {
+        self.reading.0.load(std::sync::atomic::Ordering::Relaxed) as f64 * 1e-9
     }
 
     /// The decoder's warnings so far (damaged but readable stills), one per file.
@@ -338,6 +357,7 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         orientations: Default::default(),
         kind: Kind::Video,
         decode_warnings: DecodeWarnings::default(),
+        reading: ReadClock::default(),
     })
 }
 
@@ -356,6 +376,17 @@ pub struct FrameReader {
 impl FrameReader {
     /// The next frame, `Ok(None)` at the end.
     pub fn next_frame(&mut self) -> Result<Option<Frame>, PipelineError> {
+        let t = std::time::Instant::now();
+        let frame = self.read_frame();
+        let nanos = t.elapsed().as_nanos() as u64;
+        self.info
+            .reading
+            .0
+            .fetch_add(nanos, std::sync::atomic::Ordering::Relaxed);
+        frame
+    }
+
+    fn read_frame(&mut self) -> Result<Option<Frame>, PipelineError> {
         let index = self.next;
         let image = match &mut self.source {
             Source::Images(files) => {

@@ -26,6 +26,7 @@ pub mod runner;
 pub mod selection;
 pub mod still;
 mod subject;
+pub mod timings;
 mod tracker;
 mod video_decoder;
 

@@ -42,6 +42,8 @@ pub struct RunManifest {
     pub warnings: Vec<String>,
     /// Summaries added by later steps (kinematics, reports).
     pub extra: BTreeMap<String, serde_json::Value>,
+    /// Where the wall time went, step by step (completed after the report).
+    pub timings: crate::timings::Timings,
 }
 
 /// Why a completed run has no result to report (no walking bout, no accepted cycle), or None.

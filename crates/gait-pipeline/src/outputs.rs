@@ -160,11 +160,35 @@ fn checklist(
     Ok(list.html())
 }
 
+/// The steps of [`write_outputs`] in the order they run (the keys of [`Outputs::seconds`]).
+pub(crate) const STEPS: &[&str] = &["exports", "overlay", "report", "pdf"];
+
 /// Adds the report's scores and files to run.json (when there is one).
 fn record(
     dir: &Path,
     report: &Report,
     seconds: &BTreeMap<&'static str, f64>,
+) -> Result<(), PipelineError> {
+    let formats: Vec<&str> = ExportFormat::ALL
+        .iter()
+        .filter(|f| dir.join(f.file_name()).exists())
+        .map(|f| f.as_str())
+        .collect();
+    let report = serde_json::json!({
+        "normative": report.normative.as_ref().map(|n| n.name.clone()),
+        "scores": report.scores,
+        "exports": formats,
+        "files": report.exports,
+        "seconds": seconds,
+    });
+    record_in_manifest(dir, "report", &report)
+}
+
+/// Sets `key` of the run.json in `dir` to `value` (nothing when there is no run.json).
+pub(crate) fn record_in_manifest(
+    dir: &Path,
+    key: &str,
+    value: &impl serde::Serialize,
 ) -> Result<(), PipelineError> {
     let path = dir.join("run.json");
     let Ok(text) = std::fs::read_to_string(&path) else {
@@ -172,22 +196,8 @@ fn record(
     };
     let mut v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| failed("run.json", e))?;
-    let formats: Vec<&str> = ExportFormat::ALL
-        .iter()
-        .filter(|f| dir.join(f.file_name()).exists())
-        .map(|f| f.as_str())
-        .collect();
     if let Some(m) = v.as_object_mut() {
-        m.insert(
-            "report".into(),
-            serde_json::json!({
-                "normative": report.normative.as_ref().map(|n| n.name.clone()),
-                "scores": report.scores,
-                "exports": formats,
-                "files": report.exports,
-                "seconds": seconds,
-            }),
-        );
+        m.insert(key.into(), serde_json::to_value(value).unwrap_or_default());
     }
     let text = serde_json::to_string_pretty(&v).map_err(|e| failed("run.json", e))?;
     crate::atomic::write(&path, text.as_bytes())

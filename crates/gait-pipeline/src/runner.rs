@@ -6,7 +6,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use std::time::{SystemTime, UNIX_EPOCH};
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use gait_core::{Pose, PoseSequence, StageContext};
 
@@ -18,6 +18,7 @@ use crate::progress::{Progress, RunHandle};
 use crate::registry;
 use crate::selection::{self, SelectionMode, SelectionRecord};
 use crate::subject::{self, Found};
+use crate::timings::Timings;
 use crate::{PipelineConfig, PipelineError, atomic, interpolate};
 
 /// Where a run reads from and writes to.
@@ -70,23 +71,35 @@ struct Prepared {
 }
 
 /// Opens the input, builds the stages, finds the subject and opens the stage caches.
-fn prepare(config: &PipelineConfig, opts: &RunOptions) -> Result<Prepared, PipelineError> {
-    let info = InputInfo::open(&opts.input)?;
+fn prepare(
+    config: &PipelineConfig,
+    opts: &RunOptions,
+    timings: &mut Timings,
+) -> Result<Prepared, PipelineError> {
+    let info = timings.time("probing the input", || InputInfo::open(&opts.input))?;
     let fps = config.input.fps.unwrap_or(info.fps);
     registry::check_devices(config)?;
     let ctx = StageContext::new(&opts.models_dir).on(config.run.device);
-    let stages = registry::build(config, &ctx)?;
+    let stages = timings.time("loading the models", || registry::build(config, &ctx))?;
     let names = stages.pose.keypoint_names();
     check_selection(config, &names)?;
     create_out_dir(&opts.out)?;
-    let models = Models::new(config, &ctx, info.fingerprint()?);
+    let fingerprint = timings.time("checksum of the input", || info.fingerprint())?;
+    let models = timings.time("checksums of the models", || {
+        Models::new(config, &ctx, fingerprint)
+    });
     let root = plan::cache_root(config, &opts.out);
     let total = range_len(config, &info);
     let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
+    let (t, read) = (Instant::now(), info.seconds_reading());
     let (subject, subject_record, warnings) =
         find_subject(config, &info, fps, &ctx, &models, root.as_deref(), &bar)?;
-    let (caches, mut records) =
-        plan::stage_caches(config, &models, subject.as_ref(), root.as_deref())?;
+    let model = subject_record.as_ref().map_or(0.0, |(_, r)| r.seconds);
+    let decoding = info.seconds_reading() - read;
+    timings.add_pass("subject pass", t.elapsed().as_secs_f64(), model, decoding);
+    let (caches, mut records) = timings.time("opening the caches", || {
+        plan::stage_caches(config, &models, subject.as_ref(), root.as_deref())
+    })?;
     records.extend(subject_record);
     Ok(Prepared {
         info,
@@ -108,8 +121,9 @@ pub fn run(config: &PipelineConfig, opts: &RunOptions) -> Result<RunSummary, Pip
     let started_unix = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
+    let mut timings = Timings::from_process_start();
     let lock = crate::FolderLock::acquire(&opts.out, &holder(&opts.command))?;
-    let mut summary = run_from(config, opts, started_unix).inspect_err(|e| {
+    let mut summary = run_from(config, opts, started_unix, &mut timings).inspect_err(|e| {
         if let PipelineError::Interrupted { step } = e {
             write_interrupted(config, opts, started_unix, step);
         }
@@ -155,6 +169,7 @@ fn run_from(
     config: &PipelineConfig,
     opts: &RunOptions,
     started_unix: u64,
+    timings: &mut Timings,
 ) -> Result<RunSummary, PipelineError> {
     let Prepared {
         info,
@@ -166,9 +181,14 @@ fn run_from(
         caches,
         mut records,
         mut warnings,
-    } = prepare(config, opts)?;
+    } = prepare(config, opts, timings)?;
     let total = range_len(config, &info);
     let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
+    let model_seconds = |r: &BTreeMap<String, StageRecord>| -> f64 {
+        let passes = r.iter().filter(|(k, _)| k.as_str() != plan::SUBJECT);
+        passes.map(|(_, v)| v.seconds).sum()
+    };
+    let (t, read, model) = (Instant::now(), info.seconds_reading(), model_seconds(&records));
     let out = Passes {
         config,
         info: &info,
@@ -181,6 +201,8 @@ fn run_from(
         bar: &bar,
     }
     .run()?;
+    let (model, decoding) = (model_seconds(&records) - model, info.seconds_reading() - read);
+    timings.add_pass("pose pass", t.elapsed().as_secs_f64(), model, decoding);
     warnings.extend(stages.regenerator.take_warnings());
     warnings.extend(caches.take_warnings());
     warnings.extend(info.decode_warnings());
@@ -190,8 +212,10 @@ fn run_from(
             info.no_frames_in(config.input.first_frame, config.input.last_frame),
         ));
     }
+    let t = Instant::now();
     let (seq, selection) = assemble(config, fps, &names, &out);
     write_keypoints(opts, &records, &seq, out.original)?;
+    timings.add("keypoints.csv", t.elapsed().as_secs_f64());
 
     let manifest = RunManifest {
         tool: "gait",
@@ -221,6 +245,7 @@ fn run_from(
         keypoint_names: names,
         warnings,
         extra: BTreeMap::new(),
+        timings: timings.clone(),
     };
     let mut summary = RunSummary {
         poses: seq,
@@ -231,7 +256,10 @@ fn run_from(
     // Keypoints are on disk before the kinematics run, so a kinematics
     // failure loses none of the (possibly hours of) pose work.
     summary.write_manifest(&opts.out)?;
+    let t = Instant::now();
     kinematics(config, &info, &mut summary, &opts.out)?;
+    timings.add("kinematics (angles, events, cycles)", t.elapsed().as_secs_f64());
+    summary.manifest.timings = timings.clone();
     Ok(summary)
 }
 
@@ -283,7 +311,7 @@ pub fn regenerate_part(
              frames into parts would cut apart: use init = \"noise\" to split",
         ));
     }
-    let mut p = prepare(config, opts)?;
+    let mut p = prepare(config, opts, &mut Timings::default())?;
     let total = range_len(config, &p.info);
     let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
     Passes {
@@ -481,7 +509,7 @@ pub fn run_and_write(
     config: &PipelineConfig,
     opts: &RunOptions,
 ) -> Result<(RunSummary, crate::Outputs), PipelineError> {
-    let summary = run(config, opts)?;
+    let mut summary = run(config, opts)?;
     let outputs = crate::write_outputs(&crate::OutputOptions {
         dir: &opts.out,
         input: Some(opts.input.as_path()),
@@ -495,6 +523,14 @@ pub fn run_and_write(
             write_interrupted(config, opts, summary.manifest.started_unix, step);
         }
     })?;
+    let timings = &mut summary.manifest.timings;
+    for step in crate::outputs::STEPS {
+        if let Some(s) = outputs.seconds.get(step) {
+            timings.add(*step, *s);
+        }
+    }
+    timings.close();
+    crate::outputs::record_in_manifest(&opts.out, "timings", &*timings)?;
     Ok((summary, outputs))
 }
 
