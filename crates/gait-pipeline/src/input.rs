@@ -210,11 +210,21 @@ impl InputInfo {
         Ok(hex(&hasher.finalize()))
     }
 
-    /// Decodes the frames in order.
+    /// Decodes the frames in order; a video's on a thread of its own that
+    /// stays [`READ_AHEAD`] frames ahead, so ffmpeg decodes the next frames
+    /// while the caller works on this one (through a 64 KiB pipe it could
+    /// not get ahead by even one frame).
     pub fn frames(&self) -> Result<FrameReader, PipelineError> {
         let source = match &self.kind {
             Kind::Images(files) => Source::Images(files.clone()),
-            Kind::Video => Source::Video(VideoDecoder::spawn(&self.path)?),
+            Kind::Video => {
+                let inner = FrameReader {
+                    info: self.clone(),
+                    source: Source::Video(VideoDecoder::spawn(&self.path)?),
+                    next: 0,
+                };
+                Source::Ahead(read_ahead(inner))
+            }
         };
         Ok(FrameReader {
             info: self.clone(),
@@ -364,6 +374,30 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
 enum Source {
     Video(VideoDecoder),
     Images(Vec<PathBuf>),
+    /// Frames decoded ahead by another reader on its own thread.
+    Ahead(std::sync::mpsc::Receiver<Result<Option<Frame>, PipelineError>>),
+}
+
+/// Frames decoded ahead of the caller: two full-HD frames are 12 MB.
+pub const READ_AHEAD: usize = 1;
+
+/// `inner`'s frames, read on a thread into a queue of [`READ_AHEAD`]. The
+/// thread ends at the end of the video, at an error, or when the receiver is
+/// dropped (the decoder with it).
+fn read_ahead(
+    mut inner: FrameReader,
+) -> std::sync::mpsc::Receiver<Result<Option<Frame>, PipelineError>> {
+    let (tx, rx) = std::sync::mpsc::sync_channel(READ_AHEAD);
+    std::thread::spawn(move || {
+        loop {
+            let frame = inner.read_frame();
+            let last = !matches!(frame, Ok(Some(_)));
+            if tx.send(frame).is_err() || last {
+                break;
+            }
+        }
+    });
+    rx
 }
 
 /// Yields frames in input order.
@@ -389,6 +423,10 @@ impl FrameReader {
     fn read_frame(&mut self) -> Result<Option<Frame>, PipelineError> {
         let index = self.next;
         let image = match &mut self.source {
+            Source::Ahead(rx) => {
+                // A closed queue: the thread ended after the last frame or an error it sent.
+                return rx.recv().unwrap_or(Ok(None));
+            }
             Source::Images(files) => {
                 let Some(path) = files.get(index) else {
                     return Ok(None);

@@ -80,7 +80,7 @@ fn prepare(
     let fps = config.input.fps.unwrap_or(info.fps);
     registry::check_devices(config)?;
     let ctx = StageContext::new(&opts.models_dir).on(config.run.device);
-    let stages = timings.time("loading the models", || registry::build(config, &ctx))?;
+    let mut stages = timings.time("loading the models", || registry::build(config, &ctx))?;
     let names = stages.pose.keypoint_names();
     check_selection(config, &names)?;
     create_out_dir(&opts.out)?;
@@ -92,8 +92,16 @@ fn prepare(
     let total = range_len(config, &info);
     let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
     let (t, read) = (Instant::now(), info.seconds_reading());
-    let (subject, subject_record, warnings) =
-        find_subject(config, &info, fps, &ctx, &models, root.as_deref(), &bar)?;
+    let (subject, subject_record, warnings) = find_subject(
+        config,
+        &info,
+        fps,
+        (&ctx, stages.pose.as_mut()),
+        &models,
+        root.as_deref(),
+        &bar,
+    )?;
+    stages.pose.reset();
     let model = subject_record.as_ref().map_or(0.0, |(_, r)| r.seconds);
     let decoding = info.seconds_reading() - read;
     timings.add_pass("subject pass", t.elapsed().as_secs_f64(), model, decoding);
@@ -330,12 +338,13 @@ pub fn regenerate_part(
 }
 
 /// The subject pass (cached per frame), its stage record and the warnings it
-/// leaves for run.json.
+/// leaves for run.json. `pose` is the run's pose stage: it lists the people
+/// itself when it can (no second copy of the model in memory).
 fn find_subject(
     config: &PipelineConfig,
     info: &InputInfo,
     fps: f64,
-    ctx: &StageContext,
+    (ctx, pose): (&StageContext, &mut subject::Model),
     models: &Models,
     root: Option<&Path>,
     bar: &dyn Fn(&str) -> Progress,
@@ -366,11 +375,15 @@ fn find_subject(
         }
         _ => 1,
     };
+    let workers = subject::Workers {
+        shared: finder.is_none().then_some(pose),
+        build: &build,
+        count: workers,
+    };
     let found = subject::find(
         config,
         info,
         fps,
-        &build,
         workers,
         &cache,
         &mut record,

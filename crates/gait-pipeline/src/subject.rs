@@ -19,16 +19,26 @@ pub(crate) enum Found {
     Off(Option<String>),
 }
 
-/// Runs the pass over the configured range of `info` on the original frames,
-/// with `workers` instances of the pose model (`build` makes one): frames
-/// are independent here, and the models run single-threaded.
-#[allow(clippy::too_many_arguments)]
+/// A pose model (a stage, owned by the run or by the pass).
+pub(crate) type Model = dyn PoseEstimator + 'static;
+
+/// The pose models of the pass: frames are independent here, and the models
+/// run single-threaded, so one per core.
+pub(crate) struct Workers<'a> {
+    /// The run's own pose stage, when it lists people itself (one model
+    /// fewer in memory).
+    pub(crate) shared: Option<&'a mut Model>,
+    /// Makes another instance.
+    pub(crate) build: &'a dyn Fn() -> Result<Box<dyn PoseEstimator>, PipelineError>,
+    pub(crate) count: usize,
+}
+
+/// Runs the pass over the configured range of `info` on the original frames.
 pub(crate) fn find(
     config: &PipelineConfig,
     info: &InputInfo,
     fps: f64,
-    build: &dyn Fn() -> Result<Box<dyn PoseEstimator>, PipelineError>,
-    workers: usize,
+    workers: Workers,
     cache: &StageCache,
     record: &mut StageRecord,
     bar: &Progress,
@@ -36,10 +46,16 @@ pub(crate) fn find(
     if !config.subject.enabled {
         return Ok(Found::Off(None));
     }
-    let mut models = Vec::with_capacity(workers.max(1));
-    for _ in 0..workers.max(1) {
-        models.push(build()?);
+    let extra = workers.count.max(1) - usize::from(workers.shared.is_some());
+    let mut owned = Vec::with_capacity(extra);
+    for _ in 0..extra {
+        owned.push((workers.build)()?);
     }
+    let mut models: Vec<&mut Model> = workers
+        .shared
+        .into_iter()
+        .chain(owned.iter_mut().map(|m| m.as_mut()))
+        .collect();
     let Some(frames) = sightings(config, info, &mut models, cache, record, bar)? else {
         return Ok(Found::Off(Some(
             "the pose stage cannot list the people in a frame: no subject tracking, the estimator picks a person frame by frame".into(),
@@ -72,7 +88,7 @@ type FramePeople = Vec<(usize, Vec<Sighting>)>;
 fn sightings(
     config: &PipelineConfig,
     info: &InputInfo,
-    models: &mut [Box<dyn PoseEstimator>],
+    models: &mut [&mut Model],
     cache: &StageCache,
     record: &mut StageRecord,
     bar: &Progress,
@@ -81,7 +97,9 @@ fn sightings(
     let mut reader = info.frames()?;
     let mut out: Vec<(usize, Option<Vec<Sighting>>)> = Vec::new();
     let mut pending: Vec<Frame> = Vec::new();
-    let batch = 2 * models.len();
+    // One frame per model: the reader decodes the next ones meanwhile, and
+    // every frame held costs a full-size image.
+    let batch = models.len();
     let mut done = false;
     while !done {
         match reader.next_frame()? {
@@ -125,7 +143,7 @@ fn sightings(
 /// The people of each of `frames`, the frames shared out among `models`
 /// (one thread each); `None` when the estimator cannot list people.
 fn people(
-    models: &mut [Box<dyn PoseEstimator>],
+    models: &mut [&mut Model],
     frames: &[Frame],
 ) -> Result<Option<Vec<Vec<Sighting>>>, PipelineError> {
     let per = frames.len().div_ceil(models.len()).max(1);
@@ -133,7 +151,7 @@ fn people(
         let handles: Vec<_> = models
             .iter_mut()
             .zip(frames.chunks(per))
-            .map(|(model, chunk)| s.spawn(move || of_frames(model.as_mut(), chunk)))
+            .map(|(model, chunk)| s.spawn(move || of_frames(&mut **model, chunk)))
             .collect();
         handles
             .into_iter()
