@@ -128,7 +128,7 @@ impl RegeneratorConfig {
         match self {
             RegeneratorConfig::Passthrough => Vec::new(),
             RegeneratorConfig::Controlnet(c) => match c.backend {
-                gait_core::Backend::Candle => weights::required_files(
+                gait_core::Backend::Candle | gait_core::Backend::Auto => weights::required_files(
                     &ctx.model_path(&c.sd_path),
                     &ctx.model_path(&c.controlnet_path),
                 ),

@@ -32,7 +32,7 @@ impl ControlnetRegenerator {
     pub fn new(config: &ControlnetConfig, ctx: &StageContext) -> Result<Self, DiffuseError> {
         config.validate().map_err(DiffuseError::Config)?;
         let pipeline = match config.backend {
-            Backend::Candle => {
+            Backend::Candle | Backend::Auto => {
                 let device = candle_device(ctx.device)?;
                 if config.dtype == crate::Dtype::Bf16 && device.is_cpu() {
                     // candle 0.11.1 has no bf16 matmul on CPU.

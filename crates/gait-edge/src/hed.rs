@@ -67,7 +67,7 @@ impl HedConfig {
     /// The weights file this config reads, resolved in the models folder.
     pub fn weights_path(&self, ctx: &StageContext) -> PathBuf {
         let default = match self.backend {
-            Backend::Candle => "ControlNetHED.pth",
+            Backend::Candle | Backend::Auto => "ControlNetHED.pth",
             Backend::Ort => "ControlNetHED.onnx",
         };
         ctx.model_path(self.weights.as_deref().unwrap_or(Path::new(default)))
@@ -159,7 +159,7 @@ impl HedNetwork {
             return Err(HedError::Missing);
         }
         Ok(match backend {
-            Backend::Candle => {
+            Backend::Candle | Backend::Auto => {
                 let device = device.candle().map_err(HedError::Device)?;
                 Self::Candle(Box::new(CandleHedNet(CandleHed::load(path, &device)?)))
             }

@@ -87,6 +87,9 @@ pub struct PipelineConfig {
     pub export: ExportConfig,
     /// Thresholds of the amputee gait-deviation checklist (gait-checklist).
     pub checklist: gait_checklist::ChecklistConfig,
+    /// How each `backend = "auto"` was decided (run.json's `backend_choices`).
+    #[serde(skip)]
+    pub backend_choices: Vec<String>,
 }
 
 const TABLES: [&str; 12] = [
@@ -162,7 +165,7 @@ impl PipelineConfig {
             };
             Ok(with_default_kind(given, defaults.get(name)))
         };
-        let config = Self {
+        let mut config = Self {
             input: table_as(origins, "input", take("input")?)?,
             run: table_as(origins, "run", take("run")?)?,
             subject: table_as(origins, "subject", take("subject")?)?,
@@ -175,8 +178,10 @@ impl PipelineConfig {
             report: table_as(origins, "report", take("report")?)?,
             export: table_as(origins, "export", take("export")?)?,
             checklist: table_as(origins, "checklist", take("checklist")?)?,
+            backend_choices: Vec::new(),
         };
         config.validate(origins)?;
+        config.backend_choices = crate::backend_choice::decide(&mut config);
         Ok(config)
     }
 

@@ -3,6 +3,7 @@
 //! the runner that drives frames through the stages.
 
 pub use gait_core::atomic;
+mod backend_choice;
 mod beside;
 mod cache;
 pub mod config;

@@ -44,6 +44,9 @@ pub struct RunManifest {
     pub extra: BTreeMap<String, serde_json::Value>,
     /// Where the wall time went, step by step (completed after the report).
     pub timings: crate::timings::Timings,
+    /// How each `backend = "auto"` was decided (the config holds the choice).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub backend_choices: Vec<String>,
 }
 
 /// Why a completed run has no result to report (no walking bout, no accepted cycle), or None.

@@ -254,6 +254,7 @@ fn run_from(
         warnings,
         extra: BTreeMap::new(),
         timings: timings.clone(),
+        backend_choices: config.backend_choices.clone(),
     };
     let mut summary = RunSummary {
         poses: seq,

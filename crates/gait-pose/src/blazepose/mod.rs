@@ -98,7 +98,7 @@ impl BlazeposeConfig {
     pub fn model_files(&self, ctx: &StageContext) -> Vec<PathBuf> {
         let files = self.tflite_files(ctx);
         match self.backend {
-            Backend::Candle => files.to_vec(),
+            Backend::Candle | Backend::Auto => files.to_vec(),
             Backend::Ort => files
                 .iter()
                 .flat_map(|f| [f.clone(), net::onnx_path(f)])

@@ -46,7 +46,7 @@ pub(crate) fn load(
     }
     let graph = load_graph(path).map_err(|e| StageError::bad_model(path, e))?;
     match backend {
-        Backend::Candle => {
+        Backend::Candle | Backend::Auto => {
             let graph = CandleGraph::new(&graph).map_err(|e| StageError::bad_model(path, e))?;
             Ok(Box::new(CandleNet { graph }))
         }

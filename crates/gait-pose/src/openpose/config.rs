@@ -49,7 +49,7 @@ impl OpenposeConfig {
     /// checkpoint for candle, its ONNX export (or `openpose/body_25.onnx`) for ort.
     pub fn default_model_path(&self) -> PathBuf {
         match (self.backend, self.model) {
-            (Backend::Candle, _) => PathBuf::from(Self::FETCHED_CHECKPOINT),
+            (Backend::Candle | Backend::Auto, _) => PathBuf::from(Self::FETCHED_CHECKPOINT),
             (Backend::Ort, OpenposeModel::Coco18) => PathBuf::from("openpose/body_pose_model.onnx"),
             (Backend::Ort, OpenposeModel::Body25) => PathBuf::from("openpose/body_25.onnx"),
         }

@@ -50,7 +50,7 @@ pub fn load_on(
 ) -> Result<Box<dyn OpenposeNet>, StageError> {
     match backend {
         Backend::Ort => Ok(Box::new(OrtNet::load(path, model, device)?)),
-        Backend::Candle => {
+        Backend::Candle | Backend::Auto => {
             if model != OpenposeModel::Coco18 {
                 return Err(StageError::BadInput(format!(
                     "the candle backend runs the COCO-18 model only; for {model:?} use backend = \"ort\" \
