@@ -26,9 +26,17 @@ pub(crate) fn decide(config: &mut PipelineConfig) -> Vec<String> {
         P::Openpose(c) => backends.push(("pose", &mut c.backend)),
         P::Plugin(_) | P::Python(_) => {}
     }
+    let gpu = !config.run.device.is_cpu();
     let mut notes = Vec::new();
     for (stage, backend) in backends {
-        let (chosen, why) = backend.decide(|| gait_ort::environment().map(|_| ()));
+        let (chosen, why) = backend.decide(|| {
+            if gpu {
+                // ONNX Runtime on a GPU needs the onnxruntime-gpu library; candle is what
+                // `[run] device` set up (BlazePose on candle stays on the CPU).
+                return Err("a GPU run: ort there needs the onnxruntime-gpu library, set backend = \"ort\" for it".into());
+            }
+            gait_ort::environment().map(|_| ())
+        });
         if let Some(why) = why {
             notes.push(format!("{stage}: auto -> {chosen}: {why}"));
         }
