@@ -71,6 +71,7 @@ fn visit_at(case: &Path, height_m: f64, work: &Path, fps: f64) -> BTreeSet<Strin
             subject: "S".into(),
             session: case.file_name().unwrap().to_string_lossy().into_owned(),
             date: String::new(),
+            prosthetic: None,
         },
     };
     let summary = gait_visit::write(&work.join("visit"), &passes, &o).expect("visit");
@@ -296,11 +297,16 @@ fn progress_calls_the_planted_change_and_nothing_on_the_other_side() {
         calls.iter().all(|c| c.1 == "right"),
         "a change on the left: {calls:?}"
     );
-    assert!(
-        std::fs::read_to_string(out.join("progress.html"))
-            .unwrap()
-            .contains("Progress across visits")
-    );
+    let html = std::fs::read_to_string(out.join("progress.html")).unwrap();
+    for part in [
+        "Progress across visits",
+        "Gait Profile Score",
+        "GPS, right (deg)",
+        "Symmetry indices",
+        "Mean curves, visit by visit",
+    ] {
+        assert!(html.contains(part), "progress.html lacks {part}");
+    }
 }
 
 /// A case's four views as 30 fps videos (every 5th frame) with BlazePose-level jitter: 1 px

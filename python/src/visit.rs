@@ -48,6 +48,7 @@ pub(crate) fn visit(
             subject,
             session,
             date,
+            prosthetic: None,
         },
     };
     Ok(gait_visit::write(&out, &read, &o).map_err(bad)?.report)

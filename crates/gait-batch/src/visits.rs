@@ -111,6 +111,7 @@ fn visits(out: &Path, plan: &Plan, cohort: &[CohortRow]) -> Result<Vec<Written>,
                 subject: subject.clone(),
                 session: session.clone(),
                 date: first.date.clone(),
+                prosthetic: None,
             },
         };
         let summary = gait_visit::write(&visit_dir(out, &subject, &session), &passes, &o)

@@ -19,13 +19,22 @@ pub enum Backend {
 impl Backend {
     /// `Auto` decided by `ort_loads` (ONNX Runtime's library loads: `Ok`, or why not);
     /// with the reason for the choice, `None` for an explicit backend.
-    pub fn decide(self, ort_loads: impl FnOnce() -> Result<(), String>) -> (Backend, Option<String>) {
+    pub fn decide(
+        self,
+        ort_loads: impl FnOnce() -> Result<(), String>,
+    ) -> (Backend, Option<String>) {
         if self != Backend::Auto {
             return (self, None);
         }
         match ort_loads() {
-            Ok(()) => (Backend::Ort, Some("ONNX Runtime loads here, and is the faster".into())),
-            Err(why) => (Backend::Candle, Some(format!("ONNX Runtime is not available ({why})"))),
+            Ok(()) => (
+                Backend::Ort,
+                Some("ONNX Runtime loads here, and is the faster".into()),
+            ),
+            Err(why) => (
+                Backend::Candle,
+                Some(format!("ONNX Runtime is not available ({why})")),
+            ),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Small HTML helpers: escaping, tables, base64 data URIs.
 
 /// Escapes text for HTML element content and attribute values.
-pub(crate) fn escape(s: &str) -> String {
+pub fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
@@ -18,7 +18,7 @@ pub(crate) fn escape(s: &str) -> String {
 
 /// An HTML table with a header row; cells are escaped, except that a cell
 /// wrapped in `**` is shown bold (as in table.md).
-pub(crate) fn table(header: &[String], rows: &[Vec<String>]) -> String {
+pub fn table(header: &[String], rows: &[Vec<String>]) -> String {
     let cell = |tag: &str, s: &str| match s.strip_prefix("**").and_then(|s| s.strip_suffix("**")) {
         Some(b) => format!("<{tag}><b>{}</b></{tag}>", escape(b)),
         None => format!("<{tag}>{}</{tag}>", escape(s)),
@@ -41,7 +41,7 @@ pub(crate) fn table(header: &[String], rows: &[Vec<String>]) -> String {
 }
 
 /// Standard base64 with padding (RFC 4648), for `data:` URIs.
-pub(crate) fn base64(bytes: &[u8]) -> String {
+pub fn base64(bytes: &[u8]) -> String {
     const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for chunk in bytes.chunks(3) {

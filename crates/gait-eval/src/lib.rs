@@ -12,7 +12,7 @@ pub mod export;
 pub mod failure;
 pub mod frontal;
 mod fsutil;
-mod html;
+pub mod html;
 mod input;
 pub mod keypoint_error;
 pub mod kin;

@@ -196,7 +196,11 @@ fn run_from(
         let passes = r.iter().filter(|(k, _)| k.as_str() != plan::SUBJECT);
         passes.map(|(_, v)| v.seconds).sum()
     };
-    let (t, read, model) = (Instant::now(), info.seconds_reading(), model_seconds(&records));
+    let (t, read, model) = (
+        Instant::now(),
+        info.seconds_reading(),
+        model_seconds(&records),
+    );
     let out = Passes {
         config,
         info: &info,
@@ -209,7 +213,10 @@ fn run_from(
         bar: &bar,
     }
     .run()?;
-    let (model, decoding) = (model_seconds(&records) - model, info.seconds_reading() - read);
+    let (model, decoding) = (
+        model_seconds(&records) - model,
+        info.seconds_reading() - read,
+    );
     timings.add_pass("pose pass", t.elapsed().as_secs_f64(), model, decoding);
     warnings.extend(stages.regenerator.take_warnings());
     warnings.extend(caches.take_warnings());
@@ -267,7 +274,10 @@ fn run_from(
     summary.write_manifest(&opts.out)?;
     let t = Instant::now();
     kinematics(config, &info, &mut summary, &opts.out)?;
-    timings.add("kinematics (angles, events, cycles)", t.elapsed().as_secs_f64());
+    timings.add(
+        "kinematics (angles, events, cycles)",
+        t.elapsed().as_secs_f64(),
+    );
     summary.manifest.timings = timings.clone();
     Ok(summary)
 }
@@ -381,15 +391,7 @@ fn find_subject(
         build: &build,
         count: workers,
     };
-    let found = subject::find(
-        config,
-        info,
-        fps,
-        workers,
-        &cache,
-        &mut record,
-        &bar,
-    )?;
+    let found = subject::find(config, info, fps, workers, &cache, &mut record, &bar)?;
     bar.finish_and_clear();
     let corrupt = cache.take_warnings();
     Ok(match found {

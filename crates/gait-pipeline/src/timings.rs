@@ -39,7 +39,10 @@ impl Timings {
     /// Timings that start with the time from the process start to now.
     pub fn from_process_start() -> Self {
         let mut t = Self::default();
-        t.add("start-up (arguments, config)", process_start().elapsed().as_secs_f64());
+        t.add(
+            "start-up (arguments, config)",
+            process_start().elapsed().as_secs_f64(),
+        );
         t
     }
 
@@ -85,7 +88,9 @@ mod tests {
     fn the_rest_is_what_no_step_accounts_for() {
         mark_process_start();
         let mut t = Timings::from_process_start();
-        t.time("sleep", || std::thread::sleep(std::time::Duration::from_millis(20)));
+        t.time("sleep", || {
+            std::thread::sleep(std::time::Duration::from_millis(20))
+        });
         std::thread::sleep(std::time::Duration::from_millis(30));
         t.close();
         assert!(t.steps[1].seconds >= 0.02);

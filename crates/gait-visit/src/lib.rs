@@ -5,6 +5,7 @@
 //! the gait-deviation checklist with each item from the pass that can judge it.
 
 mod combine;
+mod outcomes;
 mod pass;
 pub mod progress;
 mod tables;
@@ -62,7 +63,11 @@ pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSumma
     let spatiotemporal = combine::spatiotemporal(passes);
     let checklist = judge_each(passes, o)?;
     tables::write_all(out, &checklist, &sagittal, &frontal, &spatiotemporal)?;
-    let label = serde_json::to_string_pretty(&o.label).unwrap_or_default();
+    let label = VisitLabel {
+        prosthetic: o.prosthetic.map(|s| s.name().to_string()),
+        ..o.label.clone()
+    };
+    let label = serde_json::to_string_pretty(&label).unwrap_or_default();
     std::fs::write(out.join("visit.json"), label).map_err(|source| VisitError::Io {
         path: out.join("visit.json"),
         source,

@@ -22,6 +22,9 @@ pub struct VisitLabel {
     pub session: String,
     /// ISO 8601, or empty.
     pub date: String,
+    /// "left" or "right" when set (written by the visit, for the progress figure).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prosthetic: Option<String>,
 }
 
 /// One checklist row of a visit: (item, side) -> (value, SD, n, unit, verdict).
@@ -102,7 +105,7 @@ impl VisitRecord {
         })
     }
 
-    fn name(&self) -> String {
+    pub(crate) fn name(&self) -> String {
         match self.label.date.as_str() {
             "" => format!("session {}", self.label.session),
             d => format!("{d} (session {})", self.label.session),
@@ -291,14 +294,31 @@ pub fn write(out: &Path, visits: &[VisitRecord]) -> Result<Vec<Change>, VisitErr
                 )
             })
             .collect();
-        let class = if calls.iter().any(|c| c.ends_with(" change")) {
+        let class = if calls
+            .iter()
+            .any(|c| c.ends_with(" change") && !c.ends_with(" no change"))
+        {
             " class=\"change\""
         } else {
             ""
         };
         html.push_str(&format!("<td{class}>{}</td></tr>", calls.join("<br>")));
     }
-    html.push_str("</table></body></html>");
+    html.push_str("</table>");
+    let norm = gait_eval::report_config::ReportConfig::default()
+        .load_normative()
+        .ok()
+        .flatten();
+    let prosthetic = visits
+        .iter()
+        .find_map(|v| v.label.prosthetic.as_deref())
+        .and_then(|s| match s {
+            "left" => Some(gait_eval::Side::Left),
+            "right" => Some(gait_eval::Side::Right),
+            _ => None,
+        });
+    html.push_str(&crate::outcomes::html(visits, norm.as_ref(), prosthetic)?);
+    html.push_str("</body></html>");
     std::fs::write(out.join("progress.html"), html).map_err(|source| VisitError::Io {
         path: out.join("progress.html"),
         source,
@@ -317,6 +337,7 @@ mod tests {
                 subject: "S".into(),
                 session: session.into(),
                 date: String::new(),
+                prosthetic: None,
             },
             rows: vec![Row {
                 item: "hip_hiking".into(),

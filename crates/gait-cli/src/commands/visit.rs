@@ -108,6 +108,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
             subject: args.subject.clone(),
             session: args.session.clone(),
             date: args.date.clone(),
+            prosthetic: None,
         },
     };
     let t = std::time::Instant::now();

@@ -97,9 +97,9 @@ pub fn read_curves_csv(path: &Path, key: &str) -> Result<Vec<CycleCurve>, EvalEr
     Ok(curves)
 }
 
-const JOINTS: [&str; 3] = ["hip", "knee", "ankle"];
+pub(super) const JOINTS: [&str; 3] = ["hip", "knee", "ankle"];
 
-fn title(joint: &str) -> String {
+pub(super) fn title(joint: &str) -> String {
     let unit = if joint == "ankle" {
         "dorsiflexion +"
     } else {
@@ -112,14 +112,14 @@ fn title(joint: &str) -> String {
 }
 
 /// One series of a panel: curve, colour, label, whether to draw the SD band.
-struct Series<'a> {
-    curve: &'a CycleCurve,
-    color: RGBColor,
-    label: String,
-    band: bool,
+pub(super) struct Series<'a> {
+    pub(super) curve: &'a CycleCurve,
+    pub(super) color: RGBColor,
+    pub(super) label: String,
+    pub(super) band: bool,
 }
 
-fn panel<DB: DrawingBackend>(
+pub(super) fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     caption: &str,
     series: &[Series],

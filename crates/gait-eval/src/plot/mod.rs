@@ -6,6 +6,7 @@ mod failure_bars;
 mod gait_graphs;
 mod map_bars;
 mod skeleton;
+mod visits;
 
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -18,6 +19,7 @@ pub use failure_bars::{FailureEntry, failure_bars};
 pub use gait_graphs::{FRONTAL, GraphContext, consistency_plot, frontal_graphs, gait_graphs};
 pub use map_bars::map_bars;
 pub use skeleton::{StripOptions, skeleton_strip};
+pub use visits::visits_plot;
 
 use crate::EvalError;
 use crate::fsutil::{ensure_dir, write_atomic};
