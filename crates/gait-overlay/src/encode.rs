@@ -115,13 +115,26 @@ fn gcd(a: u64, b: u64) -> u64 {
     if b == 0 { a.max(1) } else { gcd(b, a % b) }
 }
 
+/// The encoded size of composed frames `(w, h)`: scaled to `max_height` when taller,
+/// the aspect kept, both even (as yuv420p needs).
+pub(crate) fn scaled((w, h): (usize, usize), max_height: Option<u32>) -> (usize, usize) {
+    match max_height.map(|m| m as usize) {
+        Some(m) if h > m && m >= 2 => {
+            let even = |x: usize| (x / 2 * 2).max(2);
+            let height = even(m);
+            (even((w * height + h / 2) / h), height)
+        }
+        _ => (w, h),
+    }
+}
+
 /// ffmpeg's arguments: raw RGB24 frames of `w` x `h` on stdin at `rate`,
-/// encoded to an MP4 at `out`.
+/// encoded at `out_size` to an MP4 at `out`.
 pub(crate) fn args(
     codec: Codec,
     preset: &str,
-    w: usize,
-    h: usize,
+    (w, h): (usize, usize),
+    out_size: (usize, usize),
     rate: &str,
     out: &Path,
 ) -> Vec<OsString> {
@@ -146,6 +159,10 @@ pub(crate) fn args(
     .iter()
     .map(OsString::from)
     .collect();
+    if out_size != (w, h) {
+        a.push("-vf".into());
+        a.push(format!("scale={}:{}:flags=bicubic", out_size.0, out_size.1).into());
+    }
     let codec_args: &[&str] = match codec {
         Codec::Libx264 => &["-c:v", "libx264", "-preset", preset],
         Codec::Mpeg4 => &["-c:v", "mpeg4", "-q:v", "3"],
@@ -362,6 +379,16 @@ impl Drop for Ffmpeg {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tall_frames_are_scaled_to_the_height_cap_with_even_sides() {
+        assert_eq!(scaled((1768, 994), Some(720)), (1280, 720));
+        assert_eq!(scaled((3536, 994), Some(720)), (2560, 720));
+        assert_eq!(scaled((3840, 2160), Some(720)), (1280, 720));
+        assert_eq!(scaled((640, 480), Some(720)), (640, 480));
+        assert_eq!(scaled((1768, 994), None), (1768, 994));
+        assert_eq!(scaled((1001, 1000), Some(501)), (500, 500));
+    }
 
     #[test]
     fn a_full_disk_is_a_failure_even_when_ffmpeg_exits_0() {

@@ -142,6 +142,9 @@ pub struct OverlayOptions {
     pub preset: String,
     /// The ffmpeg program (default `ffmpeg`, found on PATH).
     pub ffmpeg: PathBuf,
+    /// Taller frames are encoded scaled down to this height (the report shows the
+    /// video 960 px wide; encoding a 1080p frame costs twice a 720p one).
+    pub max_height: Option<u32>,
 }
 
 impl Default for OverlayOptions {
@@ -151,6 +154,7 @@ impl Default for OverlayOptions {
             encoder: Encoder::default(),
             preset: "veryfast".into(),
             ffmpeg: PathBuf::from("ffmpeg"),
+            max_height: Some(720),
         }
     }
 }
@@ -158,6 +162,8 @@ impl Default for OverlayOptions {
 /// Encodes frames with their marks into an MP4 file.
 pub struct OverlayWriter {
     composer: layout::Composer,
+    /// The encoded size (the composed frames scaled down, or as composed).
+    size: (usize, usize),
     ffmpeg: Option<encode::Ffmpeg>,
     tmp: PathBuf,
     path: PathBuf,
@@ -196,11 +202,13 @@ impl OverlayWriter {
         let (codec, warning) = encode::choose(&listing, opts.encoder)?;
         let tmp = path.with_file_name(format!(".{}.partial", file_name.to_string_lossy()));
         let (w, h) = composer.out_size();
-        let args = encode::args(codec, &opts.preset, w, h, &rate, &tmp);
+        let size = encode::scaled((w, h), opts.max_height);
+        let args = encode::args(codec, &opts.preset, (w, h), size, &rate, &tmp);
         let ffmpeg = encode::Ffmpeg::spawn(&opts.ffmpeg, &args, w * h * 3)?;
         Ok((
             Self {
                 composer,
+                size,
                 ffmpeg: Some(ffmpeg),
                 tmp,
                 path: path.to_path_buf(),
@@ -212,8 +220,7 @@ impl OverlayWriter {
 
     /// Size of the encoded frames (even; wider for side by side).
     pub fn output_size(&self) -> (u32, u32) {
-        let (w, h) = self.composer.out_size();
-        (w as u32, h as u32)
+        (self.size.0 as u32, self.size.1 as u32)
     }
 
     /// Frames pushed so far.
