@@ -159,6 +159,13 @@ impl Default for OverlayOptions {
     }
 }
 
+/// The size a skeleton overlay of `width` x `height` frames is encoded at
+/// (scaled down to `opts.max_height`); frames may be pushed at that size.
+pub fn encoded_size(width: u32, height: u32, opts: &OverlayOptions) -> (u32, u32) {
+    let (w, h) = encode::scaled((width as usize, height as usize), opts.max_height);
+    (w as u32, h as u32)
+}
+
 /// Encodes frames with their marks into an MP4 file.
 pub struct OverlayWriter {
     composer: layout::Composer,

@@ -124,12 +124,12 @@ impl StageCache {
         data
     }
 
-    /// Writes an entry (atomically, with its checksum).
+    /// Writes an entry (atomically, with its checksum, which a read checks).
     fn write(&self, index: usize, ext: &str, bytes: Vec<u8>) -> Result<(), PipelineError> {
         let Some(path) = self.file(index, ext) else {
             return Ok(());
         };
-        atomic::write(&path, &with_sum(bytes)).map_err(|e| cache_err(&path, e))
+        atomic::write_unsynced(&path, &with_sum(bytes)).map_err(|e| cache_err(&path, e))
     }
 
     /// Opens (creating) `<root>/<stage>-<key prefix>`, recording the stage's

@@ -123,10 +123,13 @@ impl Driver<'_> {
             .map(|(f, _)| f)
             .collect();
         if !todo.is_empty() {
-            let seen = if self.regenerate {
-                self.regenerated(&todo)?
+            // The pose model reads the frames as they are: no copy when it sees the whole batch.
+            let seen: std::borrow::Cow<[Frame]> = if self.regenerate {
+                self.regenerated(&todo)?.into()
+            } else if todo.len() == frames.len() {
+                frames.into()
             } else {
-                todo.into_iter().cloned().collect()
+                todo.into_iter().cloned().collect::<Vec<_>>().into()
             };
             // The pose stage may track across frames: hand it runs that
             // follow each other in the pass's order, and restore or reset it
@@ -144,7 +147,7 @@ impl Driver<'_> {
                 if previous.is_none() || self.last_estimated != previous {
                     // Resuming: the tracker as it was after the previous
                     // frame, so results equal an uninterrupted run.
-                    self.resume_tracker(previous)?;
+                    self.resume_tracker(previous, frames)?;
                 }
                 // A stateful estimator goes frame by frame so that its state
                 // after every frame can be saved with that frame's pose.
@@ -352,14 +355,12 @@ impl Driver<'_> {
                 batch.push(frame);
             }
             if batch.len() == batch_size || (is_last && !batch.is_empty()) {
-                // The frames a stateful stage may have to see again (a corrupt saved state):
-                // this batch and the one before.
-                self.recent.extend(batch.iter().cloned());
-                let older = self.recent.len().saturating_sub(2 * batch_size);
-                self.recent.drain(..older);
                 let poses = self.process(&batch)?;
                 out.extend(batch.iter().map(|f| f.index).zip(poses));
-                batch.clear();
+                // The frames a stateful stage may have to see again (a corrupt saved state):
+                // the batch before (the current one is handed to it as well), moved, not copied.
+                self.recent.clear();
+                self.recent.append(&mut batch);
             }
             if is_last {
                 break;

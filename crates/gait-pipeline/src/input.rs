@@ -215,12 +215,23 @@ impl InputInfo {
     /// while the caller works on this one (through a 64 KiB pipe it could
     /// not get ahead by even one frame).
     pub fn frames(&self) -> Result<FrameReader, PipelineError> {
+        self.frames_at(None)
+    }
+
+    /// As [`Self::frames`], a video's frames scaled by ffmpeg to `size` (a
+    /// picture that will be shown smaller: decoding straight to that size
+    /// saves copying and drawing full frames). Images are read as they are.
+    pub fn frames_at(&self, size: Option<(u32, u32)>) -> Result<FrameReader, PipelineError> {
         let source = match &self.kind {
             Kind::Images(files) => Source::Images(files.clone()),
             Kind::Video => {
+                let mut info = self.clone();
+                if let Some((w, h)) = size {
+                    (info.width, info.height) = (w, h);
+                }
                 let inner = FrameReader {
-                    info: self.clone(),
-                    source: Source::Video(VideoDecoder::spawn(&self.path)?),
+                    source: Source::Video(VideoDecoder::spawn(&self.path, size)?),
+                    info,
                     next: 0,
                 };
                 Source::Ahead(read_ahead(inner))

@@ -5,7 +5,9 @@
 use std::path::{Path, PathBuf};
 
 use gait_eval::report_config::OverlayLayout;
-use gait_overlay::{Backdrop, Layout, OverlayOptions, OverlayWriter, marks_from_run_dir};
+use gait_overlay::{
+    Backdrop, FrameMarks, Layout, OverlayOptions, OverlayWriter, encoded_size, marks_from_run_dir,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::input::InputInfo;
@@ -27,6 +29,17 @@ pub fn regenerated_dir(dir: &Path, config: &PipelineConfig) -> Option<PathBuf> {
     let key = v.pointer("/stages/regenerator/cache_key")?.as_str()?;
     let folder = crate::cache::folder(&root, "regenerator", key);
     folder.is_dir().then_some(folder)
+}
+
+/// `m` with its keypoints in the pixels of frames scaled by `s`.
+fn scaled(m: &FrameMarks, s: f64) -> FrameMarks {
+    let mut m = m.clone();
+    if let Some(p) = &mut m.pose {
+        for k in &mut p.keypoints {
+            (k.x, k.y) = (k.x * s, k.y * s);
+        }
+    }
+    m
 }
 
 fn bar(progress: bool, n: usize) -> ProgressBar {
@@ -67,14 +80,19 @@ pub(crate) fn write_overlay(
         layout,
         ..Default::default()
     };
+    // A skeleton overlay shown smaller than the input is decoded at that size.
+    let (w, h) = match layout {
+        Layout::Skeleton => encoded_size(info.width, info.height, &opts),
+        Layout::SideBySide { .. } => (info.width, info.height),
+    };
+    let scale = f64::from(h) / f64::from(info.height.max(1));
     let path = dir.join("overlay.mp4");
     let (mut writer, mut warnings) =
-        OverlayWriter::start(&path, info.width, info.height, run.fps, &run.names, &opts)
-            .map_err(failed)?;
+        OverlayWriter::start(&path, w, h, run.fps, &run.names, &opts).map_err(failed)?;
     warnings.extend(run.warnings);
     let bar = bar(progress, run.marks.len());
     let mut marks = run.marks.iter().peekable();
-    let mut reader = info.frames()?;
+    let mut reader = info.frames_at(((w, h) != (info.width, info.height)).then_some((w, h)))?;
     while let Some(frame) = reader.next_frame()? {
         // Stopped: the writer's drop removes the unfinished file.
         crate::outputs::stop_point(handle, "overlay.mp4")?;
@@ -92,7 +110,7 @@ pub(crate) fn write_overlay(
             .and_then(|png| image::load_from_memory(&png).ok())
             .map(|i| i.to_rgb8());
         writer
-            .push(&frame.image, regen.as_ref(), m)
+            .push(&frame.image, regen.as_ref(), &scaled(m, scale))
             .map_err(failed)?;
         bar.inc(1);
     }

@@ -27,7 +27,7 @@ impl Driver<'_> {
         let redrawn = if self.stages.regenerator.is_stateful() {
             let mut out = Vec::with_capacity(inputs.len());
             for f in &inputs {
-                out.extend(self.redraw_in_order(f)?);
+                out.extend(self.redraw_in_order(f, todo)?);
             }
             out
         } else {
@@ -90,10 +90,15 @@ impl Driver<'_> {
     /// One frame through a stateful regenerator: it carries on from the
     /// frame before in the pass's order, restored from that frame's saved
     /// state when it was not the last one redrawn here, else starts afresh.
-    fn redraw_in_order(&mut self, frame: &Frame) -> Result<Vec<Frame>, PipelineError> {
+    /// `todo`: the original frames being redrawn (a lost state is rebuilt from them).
+    fn redraw_in_order(
+        &mut self,
+        frame: &Frame,
+        todo: &[Frame],
+    ) -> Result<Vec<Frame>, PipelineError> {
         let previous = self.order.previous(frame.index);
         if previous.is_none() || previous != self.last_regenerated {
-            self.resume_regenerator(previous)?;
+            self.resume_regenerator(previous, todo)?;
         }
         let out = self.redraw_batch(std::slice::from_ref(frame))?;
         // State first: a redrawn frame on disk always has its state beside it.

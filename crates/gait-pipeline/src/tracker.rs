@@ -13,8 +13,12 @@ use crate::driver::Driver;
 
 impl Driver<'_> {
     /// Puts the pose tracker where it was after frame `previous` (`None`: start
-    /// afresh).
-    pub(crate) fn resume_tracker(&mut self, previous: Option<usize>) -> Result<(), PipelineError> {
+    /// afresh). `current`: the batch being processed (not yet in `recent`).
+    pub(crate) fn resume_tracker(
+        &mut self,
+        previous: Option<usize>,
+        current: &[Frame],
+    ) -> Result<(), PipelineError> {
         let Some(p) = previous else {
             self.stages.pose.reset();
             return Ok(());
@@ -22,8 +26,8 @@ impl Driver<'_> {
         match self.caches.pose.saved_state(p) {
             Saved::Ok(s) if self.stages.pose.restore(&s) => return Ok(()),
             Saved::Corrupt => {
-                if let Some(frame) = self.recent_frame(p) {
-                    return self.estimate_again(frame);
+                if let Some(frame) = self.recent_frame(p, current) {
+                    return self.estimate_again(frame, current);
                 }
             }
             // Never saved: the frame had no estimate (out of view), so the
@@ -36,9 +40,9 @@ impl Driver<'_> {
 
     /// Estimates `frame` again from its predecessor's state, to rebuild (and
     /// save again) the tracking state after it; the pose itself is cached.
-    fn estimate_again(&mut self, frame: Frame) -> Result<(), PipelineError> {
+    fn estimate_again(&mut self, frame: Frame, current: &[Frame]) -> Result<(), PipelineError> {
         // Each step goes one frame back in the pass's order, so this ends.
-        self.resume_tracker(self.order.previous(frame.index))?;
+        self.resume_tracker(self.order.previous(frame.index), current)?;
         let index = frame.index;
         let seen = if self.regenerate {
             self.regenerated(&[&frame])?
@@ -62,6 +66,7 @@ impl Driver<'_> {
     pub(crate) fn resume_regenerator(
         &mut self,
         previous: Option<usize>,
+        current: &[Frame],
     ) -> Result<(), PipelineError> {
         let Some(p) = previous else {
             self.stages.regenerator.reset();
@@ -70,7 +75,7 @@ impl Driver<'_> {
         match self.caches.regenerator.saved_state(p) {
             Saved::Ok(s) if self.stages.regenerator.restore(&s) => return Ok(()),
             Saved::Corrupt => {
-                if let Some(frame) = self.recent_frame(p) {
+                if let Some(frame) = self.recent_frame(p, current) {
                     // Redrawn again in order (from its predecessor's state), which saves
                     // its state anew; the redrawn image itself is cached already.
                     self.redraw(&[frame])?;
@@ -84,7 +89,8 @@ impl Driver<'_> {
     }
 
     /// Frame `index`, when it is still in memory (this batch or the one before).
-    fn recent_frame(&self, index: usize) -> Option<Frame> {
-        self.recent.iter().find(|f| f.index == index).cloned()
+    fn recent_frame(&self, index: usize, current: &[Frame]) -> Option<Frame> {
+        let mut all = current.iter().chain(&self.recent);
+        all.find(|f| f.index == index).cloned()
     }
 }

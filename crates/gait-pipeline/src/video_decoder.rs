@@ -33,12 +33,15 @@ trait FrameSource: Send {
     fn end(&mut self) -> std::io::Result<Ending>;
 }
 
-/// The ffmpeg command that decodes `path` to rgb24 frames on its standard output.
-fn ffmpeg_command(path: &Path) -> Command {
+/// The ffmpeg command that decodes `path` to rgb24 frames on its standard output,
+/// scaled to `size` when given.
+fn ffmpeg_command(path: &Path, size: Option<(u32, u32)>) -> Command {
     let mut cmd = Command::new("ffmpeg");
-    cmd.args(["-v", "error", "-nostdin", "-i"])
-        .arg(path)
-        .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]);
+    cmd.args(["-v", "error", "-nostdin", "-i"]).arg(path);
+    if let Some((w, h)) = size {
+        cmd.arg("-vf").arg(format!("scale={w}:{h}:flags=bicubic"));
+    }
+    cmd.args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]);
     cmd
 }
 
@@ -49,8 +52,8 @@ struct Ffmpeg {
 }
 
 impl Ffmpeg {
-    fn spawn(path: &Path) -> Result<Self, PipelineError> {
-        let mut child = ffmpeg_command(path)
+    fn spawn(path: &Path, size: Option<(u32, u32)>) -> Result<Self, PipelineError> {
+        let mut child = ffmpeg_command(path, size)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -108,7 +111,7 @@ pub struct DecoderRecording {
 impl DecoderRecording {
     /// Runs [`ffmpeg_command`] on `path` to the end and keeps what it wrote.
     pub fn record(path: &Path) -> std::io::Result<Self> {
-        let out = ffmpeg_command(path).stdin(Stdio::null()).output()?;
+        let out = ffmpeg_command(path, None).stdin(Stdio::null()).output()?;
         Ok(DecoderRecording {
             frames: out.stdout,
             success: out.status.success(),
@@ -140,10 +143,11 @@ pub(crate) struct VideoDecoder {
 }
 
 impl VideoDecoder {
-    pub(crate) fn spawn(path: &Path) -> Result<Self, PipelineError> {
+    /// Decodes `path`, scaled to `size` when given.
+    pub(crate) fn spawn(path: &Path, size: Option<(u32, u32)>) -> Result<Self, PipelineError> {
         Ok(VideoDecoder {
             path: path.to_path_buf(),
-            source: Box::new(Ffmpeg::spawn(path)?),
+            source: Box::new(Ffmpeg::spawn(path, size)?),
         })
     }
 
