@@ -79,6 +79,9 @@ pub(crate) struct Driver<'a> {
     /// Where the subject is in each frame; frames without it get an empty
     /// pose and skip every stage. `None`: no subject tracking.
     pub(crate) subject: Option<&'a BTreeMap<usize, PersonBox>>,
+    /// (the subject's last frame, the range's last frame): frames after the
+    /// first get empty poses without being decoded.
+    pub(crate) stop_after: Option<(usize, usize)>,
     /// The frame a stateful regenerator redrew last (its state follows it).
     pub(crate) last_regenerated: Option<usize>,
     /// The current batch and the one before: a stateful stage's state lost to
@@ -365,9 +368,26 @@ impl Driver<'_> {
             if is_last {
                 break;
             }
+            if let Some((stop, end)) = self.stop_after.filter(|s| frame_index_done(&all, s.0)) {
+                if !batch.is_empty() {
+                    let poses = self.process(&batch)?;
+                    out.extend(batch.iter().map(|f| f.index).zip(poses));
+                }
+                // The rest, as an uninterrupted pass would give it: empty poses (nobody to follow).
+                let rest = stop + 1..=end;
+                let picked: Vec<usize> = rest.clone().filter(|&f| pick(f, f == end)).collect();
+                all.extend(rest);
+                out.extend(picked.into_iter().map(|f| (f, Pose::empty(self.n_keypoints))));
+                break;
+            }
         }
         Ok((all, out, self.cached_frames))
     }
+}
+
+/// Whether the pass has read frame `index` (the last one read is it).
+fn frame_index_done(all: &[usize], index: usize) -> bool {
+    all.last() == Some(&index)
 }
 
 pub(crate) fn bad_output(stage: &str, expected: &str) -> PipelineError {

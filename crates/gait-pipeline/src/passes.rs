@@ -64,6 +64,8 @@ pub(crate) struct Passes<'a> {
     pub(crate) names: &'a [String],
     /// Where the subject is in each frame; `None` without subject tracking.
     pub(crate) subject: Option<&'a BTreeMap<usize, PersonBox>>,
+    /// The last frame of the range, when the subject pass saw it.
+    pub(crate) range_end: Option<usize>,
     /// Makes a progress bar for a pass named by its argument.
     pub(crate) bar: &'a dyn Fn(&str) -> Progress,
 }
@@ -138,6 +140,11 @@ impl Passes<'_> {
             cached_frames: BTreeSet::new(),
             original_poses,
             subject: self.subject,
+            // After the subject's last frame every pose is empty: no need to decode on.
+            stop_after: self
+                .subject
+                .and_then(|s| s.keys().next_back().copied())
+                .zip(self.range_end),
         };
         let found = driver.stream(self.info, &bar, &|f, last| on_grid(f, last) && wanted(f))?;
         bar.finish_and_clear();

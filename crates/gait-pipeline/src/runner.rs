@@ -210,6 +210,7 @@ fn run_from(
         n_keypoints: names.len(),
         names: &names,
         subject: subject.as_ref().map(|s| &s.boxes),
+        range_end: subject.as_ref().map(|s| s.last_frame),
         bar: &bar,
     }
     .run()?;
@@ -342,6 +343,7 @@ pub fn regenerate_part(
         n_keypoints: p.names.len(),
         names: &p.names,
         subject: p.subject.as_ref().map(|s| &s.boxes),
+        range_end: p.subject.as_ref().map(|s| s.last_frame),
         bar: &bar,
     }
     .regenerate_part(part, parts)?;

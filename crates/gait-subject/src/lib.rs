@@ -181,6 +181,9 @@ pub struct Subject {
     /// The subject's box per frame (sighted, or bridged over a short miss).
     #[serde(skip)]
     pub boxes: BTreeMap<usize, PersonBox>,
+    /// The last frame the pass saw (the end of the analysed range).
+    #[serde(skip)]
+    pub last_frame: usize,
 }
 
 /// Links the people of `frames` (frame index, people in it; in frame order)
@@ -214,6 +217,7 @@ pub fn find(
     let bridge = (config.bridge_gap_s * fps).round() as usize;
     let boxes = bridged(&tracks, chosen, bridge, config.max_colour_distance);
     Ok(Subject {
+        last_frame: frames.last().map_or(0, |f| f.0),
         in_view: ranges(boxes.keys().copied()),
         tracks,
         chosen,
