@@ -377,7 +377,11 @@ impl Driver<'_> {
                 let rest = stop + 1..=end;
                 let picked: Vec<usize> = rest.clone().filter(|&f| pick(f, f == end)).collect();
                 all.extend(rest);
-                out.extend(picked.into_iter().map(|f| (f, Pose::empty(self.n_keypoints))));
+                out.extend(
+                    picked
+                        .into_iter()
+                        .map(|f| (f, Pose::empty(self.n_keypoints))),
+                );
                 break;
             }
         }

@@ -109,8 +109,8 @@ impl SubjectConfig {
             max_size_ratio: self.max_size_ratio,
             max_colour_distance: self.max_colour_distance,
             // A detector misses people for a few frames (motion blur, a
-            // limb across the face); nobody is replaced by someone else
-            // at the same place and size within 0.2 s.
+            // limb across the face): a track unseen for 0.2 s costs more to
+            // continue than one seen a frame ago.
             short_gap_frames: (0.2 * fps).round() as usize,
         }
     }

@@ -29,10 +29,10 @@ pub struct LinkLimits {
     /// Largest body-size ratio between a track and its next sighting.
     pub max_size_ratio: f32,
     /// Largest colour difference (see [`Appearance::distance`]) to take a
-    /// track up again after a gap longer than `short_gap_frames`.
+    /// track up again after a missed frame.
     pub max_colour_distance: f32,
-    /// Gaps up to this many frames are ordinary detector misses: position
-    /// and size decide. Longer ones need the appearance to match too.
+    /// Gaps up to this many frames are ordinary detector misses; a track
+    /// unseen for this long costs [`UNSEEN_COST`] more to continue.
     pub short_gap_frames: usize,
 }
 
@@ -104,7 +104,10 @@ impl Track {
             return None;
         }
         let colour = self.appearance().distance(&s.appearance);
-        if dt > limits.short_gap_frames && colour.is_none_or(|c| c > limits.max_colour_distance) {
+        // After a miss the colours must match too: a bystander whose track went
+        // unseen for a few frames can sit where the subject now is, at her
+        // size (her detected size jumps where her feet leave the image).
+        if dt > 1 && colour.is_none_or(|c| c > limits.max_colour_distance) {
             return None;
         }
         // A track seen a moment ago is the likelier owner of a sighting than

@@ -44,6 +44,12 @@ fn the_walker_is_followed_the_same_on_every_encoding() {
         first == 59 && last == 192 && n > 120,
         "original: {first}-{last}, {n} frames"
     );
+    // 140 frames from 1.9 s (frame 57), re-encoded: tests/batch.rs's first clip.
+    let (f, l, m) = walker("clip_1.9s");
+    assert!(
+        f <= 16 && l >= 130 && m >= 110,
+        "clip: walker {f}-{l} in {m} frames"
+    );
     for name in ["crf23", "hevc_mov", "mirrored"] {
         let (f, l, m) = walker(name);
         assert!(
