@@ -29,6 +29,9 @@ pub struct ChecklistConfig {
     pub circumduction_leg: f64,
     /// Uneven step time, stance time or step length: a symmetry index beyond this (%).
     pub symmetry_pct: f64,
+    /// Vaulting: the other heel's rise during the side's early and mid swing beyond the same
+    /// rise during the other side's swing, in leg lengths (0.04: about 3.4 cm over a 0.84 m leg).
+    pub vaulting_leg: f64,
 }
 
 impl Default for ChecklistConfig {
@@ -41,6 +44,7 @@ impl Default for ChecklistConfig {
             circumduction_cm: 5.0,
             circumduction_leg: 0.06,
             symmetry_pct: 10.0,
+            vaulting_leg: 0.04,
         }
     }
 }
@@ -55,6 +59,7 @@ impl ChecklistConfig {
             ("circumduction_cm", self.circumduction_cm),
             ("circumduction_leg", self.circumduction_leg),
             ("symmetry_pct", self.symmetry_pct),
+            ("vaulting_leg", self.vaulting_leg),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(ChecklistError::Config(format!(

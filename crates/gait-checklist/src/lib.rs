@@ -14,6 +14,7 @@ mod html;
 mod judge;
 mod run_files;
 mod sagittal_items;
+mod vaulting;
 mod verdict;
 
 use std::path::Path;
@@ -36,12 +37,7 @@ pub enum ChecklistError {
 
 /// Items of the lists that gait does not measure yet: always "not assessable", so the
 /// checklist shows the whole list, not only what is easy.
-const UNMEASURED: [Item; 6] = [
-    unmeasured(
-        "vaulting",
-        "Vaulting (the sound foot rising early on its toes)",
-        "side",
-    ),
+const UNMEASURED: [Item; 5] = [
     unmeasured("terminal_swing_impact", "Terminal swing impact", "side"),
     unmeasured("foot_slap", "Foot slap", "side"),
     unmeasured(
@@ -100,6 +96,7 @@ pub fn assess(
         ));
     }
     verdicts.extend(sagittal_items::assess(&run, cfg, norm));
+    verdicts.extend(vaulting::assess(&run, cfg));
     for item in UNMEASURED {
         for side in Side::BOTH {
             verdicts.push(Verdict::not_assessable(

@@ -14,6 +14,8 @@ pub struct Stride {
     pub last: usize,
     /// The side's toe-off inside the stride, as a fraction of it (events.csv).
     pub toe_off: Option<f64>,
+    /// Thigh + shank in the image (cycle_quality.csv's `leg_px`; NaN when absent).
+    pub leg_px: f64,
 }
 
 /// A row of spatiotemporal.csv.
@@ -49,6 +51,8 @@ pub struct RunFiles {
     /// frontal_angles.csv: `left_trunk_lean` ... -> (frame -> degrees).
     pub frontal: BTreeMap<String, BTreeMap<usize, f64>>,
     pub feet: Vec<FootLength>,
+    /// keypoints_filtered.csv: each heel's image y per frame.
+    pub heel_y: BTreeMap<Side, BTreeMap<usize, f64>>,
 }
 
 type Rows = (Vec<String>, Vec<Vec<String>>);
@@ -102,6 +106,7 @@ impl RunFiles {
             }
         }
         r.strides = strides(dir)?;
+        r.heel_y = heels(&dir.join("keypoints_filtered.csv"))?;
         if let Some((h, rows)) = read(&dir.join("cycles_all.csv"))? {
             let f = "cycles_all.csv";
             let [s, j, first, p, v] =
@@ -200,6 +205,7 @@ fn strides(dir: &Path) -> Result<Vec<Stride>, ChecklistError> {
         col(&h, "last_frame", f)?,
         col(&h, "accepted", f)?,
     );
+    let leg = h.iter().position(|c| c == "leg_px");
     let mut toe_offs: Vec<(Side, usize)> = Vec::new();
     if let Some((eh, erows)) = read(&dir.join("events.csv"))? {
         let (es, ee, ef) = (
@@ -228,7 +234,39 @@ fn strides(dir: &Path) -> Result<Vec<Stride>, ChecklistError> {
                 first,
                 last,
                 toe_off,
+                leg_px: leg.map_or(f64::NAN, |c| num(&row[c])),
             })
         })
         .collect())
+}
+
+/// Each heel's image y per frame from a keypoints CSV (DeepLabCut layout: rows
+/// `scorer`, `bodyparts`, `coords`, then one row per frame); empty when absent.
+fn heels(path: &Path) -> Result<BTreeMap<Side, BTreeMap<usize, f64>>, ChecklistError> {
+    let mut out = BTreeMap::new();
+    if !path.exists() {
+        return Ok(out);
+    }
+    let bad = |e: csv::Error| ChecklistError::Input(format!("{}: {e}", path.display()));
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_path(path)
+        .map_err(bad)?;
+    let rows: Vec<csv::StringRecord> = r.records().collect::<Result<_, _>>().map_err(bad)?;
+    let (Some(parts), Some(coords)) = (rows.get(1), rows.get(2)) else {
+        return Ok(out);
+    };
+    for sd in Side::BOTH {
+        let name = format!("{}_heel", sd.name());
+        let Some(c) = (0..parts.len()).find(|&k| &parts[k] == name && coords.get(k) == Some("y"))
+        else {
+            continue;
+        };
+        let series = rows[3..]
+            .iter()
+            .filter_map(|row| Some((row.get(0)?.parse().ok()?, num(row.get(c)?))));
+        out.insert(sd, series.collect());
+    }
+    Ok(out)
 }
