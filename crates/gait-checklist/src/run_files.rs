@@ -259,7 +259,7 @@ fn heels(path: &Path) -> Result<BTreeMap<Side, BTreeMap<usize, f64>>, ChecklistE
     };
     for sd in Side::BOTH {
         let name = format!("{}_heel", sd.name());
-        let Some(c) = (0..parts.len()).find(|&k| &parts[k] == name && coords.get(k) == Some("y"))
+        let Some(c) = (0..parts.len()).find(|&k| parts[k] == name && coords.get(k) == Some("y"))
         else {
             continue;
         };

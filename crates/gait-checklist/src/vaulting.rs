@@ -49,7 +49,7 @@ fn rises(run: &RunFiles, side: Side) -> Vec<Sample> {
                 .map(|(_, y)| ground - y)
                 .filter(|v| v.is_finite())
                 .collect();
-            if window.is_empty() || !(s.leg_px > 0.0) {
+            if window.is_empty() || s.leg_px.is_nan() || s.leg_px <= 0.0 {
                 return None;
             }
             window.sort_by(f64::total_cmp);
