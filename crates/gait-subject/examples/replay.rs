@@ -53,4 +53,9 @@ fn main() {
         );
     }
     println!("{}", s.reason);
+    if std::env::var_os("REPLAY_BOXES").is_some() {
+        for (f, b) in &s.boxes {
+            println!("box {f} {:.1}", b.centre[0]);
+        }
+    }
 }
