@@ -13,20 +13,13 @@ import pathlib
 import shutil
 import statistics
 import subprocess
+import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SAMPLE = ROOT / "data/sample/sports2d-demo.mp4"
-
-
-def probe(path):
-    """(frames, fps) of a video."""
-    out = subprocess.run(
-        ["ffprobe", "-v", "error", "-select_streams", "v:0", "-count_packets", "-show_entries",
-         "stream=r_frame_rate,nb_read_packets", "-of", "csv=p=0", str(path)],
-        check=True, capture_output=True, text=True).stdout.strip().split(",")
-    num, den = out[0].split("/")
-    return int(out[1]), float(num) / float(den)
+sys.path.insert(0, str(ROOT / "tools/robustness"))
+from variants import probe  # noqa: E402  (width, height, fps, frames) by ffprobe
 
 
 def make_videos(work):
@@ -70,7 +63,7 @@ def main():
     a = ap.parse_args()
     work = ROOT / "target/bench/scale"
     videos = make_videos(work)
-    seconds = {k: probe(v)[0] / probe(v)[1] for k, v in videos.items()}
+    seconds = {k: probe(v)[3] / probe(v)[2] for k, v in videos.items()}
     rows = {k: [] for k in videos}
     for r in range(a.rounds):
         for name, video in videos.items():
