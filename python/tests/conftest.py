@@ -101,7 +101,7 @@ def assert_frames_equal(left, right, what=""):
         raise AssertionError(f"{what}: {e}") from None
 
 
-def without_timing(value, drop=("command", "started_unix", "seconds")):
+def without_timing(value, drop=("command", "started_unix", "seconds", "timings")):
     """run.json without what records how the run went rather than what it found."""
     if isinstance(value, dict):
         return {k: without_timing(v, drop) for k, v in value.items() if k not in drop}
@@ -114,10 +114,10 @@ def report_without_timing(text):
     """report.html without the run.json fields without_timing drops (it lists run.json)."""
     text = re.sub(r"&quot;command&quot;: \[.*?\],", "", text, flags=re.S)
     text = re.sub(r"&quot;seconds&quot;: \{.*?\}", "", text, flags=re.S)
-    return re.sub(r"&quot;(started_unix|seconds)&quot;: [0-9.e+-]+,?", "", text)
+    return re.sub(r"&quot;(started_unix|seconds|total_s|unaccounted_s)&quot;: [0-9.e+-]+,?", "", text)
 
 
-def compare_run_dirs(a, b, skip=(), drop=("command", "started_unix", "seconds")):
+def compare_run_dirs(a, b, skip=(), drop=("command", "started_unix", "seconds", "timings")):
     """Differences between two run folders' files, as a list of messages (empty: the same).
 
     Every file is compared byte for byte except run.json (without `drop`), report.html (the same

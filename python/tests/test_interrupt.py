@@ -89,7 +89,7 @@ def test_ctrl_c_stops_the_run_and_a_rerun_resumes(clip_run, video, tmp_path):
     assert manifest["stages"]["pose"]["cached"] >= kept - 4, manifest["stages"]["pose"]
     # ... and finds what a run without Ctrl-C found (the report names its folder: not compared;
     # run.json without its record of the cache use).
-    drop = ("command", "started_unix", "seconds", "frames_from_cache", "cached", "computed")
+    drop = ("command", "started_unix", "seconds", "timings", "frames_from_cache", "cached", "computed")
     diffs = compare_run_dirs(clip_run.dir, out, skip=("report.html",), drop=drop)
     assert diffs == []
     assert json.loads((out / "run.json").read_text())["frames_processed"] == 60

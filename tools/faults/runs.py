@@ -111,7 +111,8 @@ def _manifest(text, run_dir):
 
     def clean(v):
         if isinstance(v, dict):
-            drop = {"command", "started_unix", "seconds", "cached", "computed", "frames_from_cache"}
+            drop = {"command", "started_unix", "seconds", "cached", "computed", "frames_from_cache",
+                    "timings"}
             return {k: clean(x) for k, x in v.items() if k not in drop}
         if isinstance(v, list):
             return [clean(x) for x in v if not (isinstance(x, str) and "failed its checksum" in x)]
