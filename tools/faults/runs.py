@@ -111,8 +111,9 @@ def _manifest(text, run_dir):
 
     def clean(v):
         if isinstance(v, dict):
+            # backend_choices: how `auto` was decided, at the run or when a batch planned it.
             drop = {"command", "started_unix", "seconds", "cached", "computed", "frames_from_cache",
-                    "timings"}
+                    "timings", "backend_choices"}
             return {k: clean(x) for k, x in v.items() if k not in drop}
         if isinstance(v, list):
             return [clean(x) for x in v if not (isinstance(x, str) and "failed its checksum" in x)]
