@@ -17,7 +17,7 @@ use crate::plan::{self, Models};
 use crate::progress::{Progress, RunHandle};
 use crate::registry;
 use crate::selection::{self, SelectionMode, SelectionRecord};
-use crate::subject::{self, Found};
+use crate::subject;
 use crate::timings::Timings;
 use crate::{PipelineConfig, PipelineError, atomic, interpolate};
 
@@ -92,7 +92,7 @@ fn prepare(
     let total = range_len(config, &info);
     let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
     let (t, read) = (Instant::now(), info.seconds_reading());
-    let (subject, subject_record, warnings) = find_subject(
+    let (subject, subject_record, warnings) = subject::run_pass(
         config,
         &info,
         fps,
@@ -349,70 +349,6 @@ pub fn regenerate_part(
     .regenerate_part(part, parts)?;
     Ok(p.records.remove("regenerator").unwrap_or_default())
 }
-
-/// The subject pass (cached per frame), its stage record and the warnings it
-/// leaves for run.json. `pose` is the run's pose stage: it lists the people
-/// itself when it can (no second copy of the model in memory).
-fn find_subject(
-    config: &PipelineConfig,
-    info: &InputInfo,
-    fps: f64,
-    (ctx, pose): (&StageContext, &mut subject::Model),
-    models: &Models,
-    root: Option<&Path>,
-    bar: &dyn Fn(&str) -> Progress,
-) -> Result<SubjectPass, PipelineError> {
-    // A stage that cannot list people (Python) has them listed by the built-in detector.
-    let finder = config.pose.people_finder();
-    let pose_ctx = ctx.clone().on(models.devices[2]);
-    let mut kind = registry::stage_kinds(config)[2].1.clone();
-    if let Some(f) = &finder {
-        if let Err(e) = f.build(&pose_ctx) {
-            let why = format!(
-                "the {kind} pose stage cannot list the people in a frame and the built-in BlazePose detector that lists them for it is not there ({}): no subject tracking, the estimator picks a person frame by frame; run `gait models fetch blazepose`",
-                crate::one_line(&e.to_string())
-            );
-            return Ok((None, None, vec![why]));
-        }
-        kind = format!("blazepose detector (people for the {kind} pose stage)");
-    }
-    let people_from = finder.as_ref().unwrap_or(&config.pose);
-    let (cache, key) = plan::subject_cache(people_from, models, root)?;
-    let mut record = plan::record(kind, models.devices[2], &key);
-    let bar = bar("finding the subject");
-    let build = || people_from.build(&pose_ctx).map_err(PipelineError::from);
-    // One model per core on the CPU; a GPU runs one at a time anyway.
-    let workers = match models.devices[2] {
-        gait_core::Device::Cpu => {
-            std::thread::available_parallelism().map_or(1, |n| n.get().min(4))
-        }
-        _ => 1,
-    };
-    let workers = subject::Workers {
-        shared: finder.is_none().then_some(pose),
-        build: &build,
-        count: workers,
-    };
-    let found = subject::find(config, info, fps, workers, &cache, &mut record, &bar)?;
-    bar.finish_and_clear();
-    let corrupt = cache.take_warnings();
-    Ok(match found {
-        Found::Subject(s) => {
-            let mut warnings = corrupt;
-            if !s.walking {
-                warnings.push(format!("no walking subject found: {}", s.reason));
-            }
-            (Some(s), Some((plan::SUBJECT.to_string(), record)), warnings)
-        }
-        Found::Off(why) => (None, None, corrupt.into_iter().chain(why).collect()),
-    })
-}
-
-type SubjectPass = (
-    Option<gait_subject::Subject>,
-    Option<(String, StageRecord)>,
-    Vec<String>,
-);
 
 /// The poses of every frame of the range (a stride's skipped frames
 /// interpolated) and the record of which frames went where.

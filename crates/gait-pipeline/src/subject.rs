@@ -7,9 +7,15 @@ use gait_core::{Frame, PoseEstimator};
 use gait_subject::{Appearance, Sighting, Subject};
 use std::time::Instant;
 
+use std::path::Path;
+
+use gait_core::StageContext;
+
 use crate::cache::StageCache;
 use crate::input::InputInfo;
 use crate::manifest::StageRecord;
+use crate::plan::{self, Models};
+use crate::registry;
 use crate::{PipelineConfig, PipelineError};
 
 /// What the subject pass found: the subject, or why there is none to follow
@@ -198,3 +204,67 @@ fn of_frames(
     }
     Ok(Some(out))
 }
+
+/// The subject pass (cached per frame), its stage record and the warnings it
+/// leaves for run.json. `pose` is the run's pose stage: it lists the people
+/// itself when it can (no second copy of the model in memory).
+pub(crate) fn run_pass(
+    config: &PipelineConfig,
+    info: &InputInfo,
+    fps: f64,
+    (ctx, pose): (&StageContext, &mut Model),
+    models: &Models,
+    root: Option<&Path>,
+    bar: &dyn Fn(&str) -> Progress,
+) -> Result<SubjectPass, PipelineError> {
+    // A stage that cannot list people (Python) has them listed by the built-in detector.
+    let finder = config.pose.people_finder();
+    let pose_ctx = ctx.clone().on(models.devices[2]);
+    let mut kind = registry::stage_kinds(config)[2].1.clone();
+    if let Some(f) = &finder {
+        if let Err(e) = f.build(&pose_ctx) {
+            let why = format!(
+                "the {kind} pose stage cannot list the people in a frame and the built-in BlazePose detector that lists them for it is not there ({}): no subject tracking, the estimator picks a person frame by frame; run `gait models fetch blazepose`",
+                crate::one_line(&e.to_string())
+            );
+            return Ok((None, None, vec![why]));
+        }
+        kind = format!("blazepose detector (people for the {kind} pose stage)");
+    }
+    let people_from = finder.as_ref().unwrap_or(&config.pose);
+    let (cache, key) = plan::subject_cache(people_from, models, root)?;
+    let mut record = plan::record(kind, models.devices[2], &key);
+    let bar = bar("finding the subject");
+    let build = || people_from.build(&pose_ctx).map_err(PipelineError::from);
+    // One model per core on the CPU; a GPU runs one at a time anyway.
+    let workers = match models.devices[2] {
+        gait_core::Device::Cpu => {
+            std::thread::available_parallelism().map_or(1, |n| n.get().min(4))
+        }
+        _ => 1,
+    };
+    let workers = Workers {
+        shared: finder.is_none().then_some(pose),
+        build: &build,
+        count: workers,
+    };
+    let found = find(config, info, fps, workers, &cache, &mut record, &bar)?;
+    bar.finish_and_clear();
+    let corrupt = cache.take_warnings();
+    Ok(match found {
+        Found::Subject(s) => {
+            let mut warnings = corrupt;
+            if !s.walking {
+                warnings.push(format!("no walking subject found: {}", s.reason));
+            }
+            (Some(s), Some((plan::SUBJECT.to_string(), record)), warnings)
+        }
+        Found::Off(why) => (None, None, corrupt.into_iter().chain(why).collect()),
+    })
+}
+
+pub(crate) type SubjectPass = (
+    Option<gait_subject::Subject>,
+    Option<(String, StageRecord)>,
+    Vec<String>,
+);
