@@ -5,10 +5,11 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use gait_core::Frame;
 use sha2::{Digest, Sha256};
 
 use crate::PipelineError;
+pub use crate::frame_reader::{FrameReader, READ_AHEAD};
+use crate::frame_reader::{Source, read_ahead};
 use crate::still;
 pub use crate::video_decoder::DecoderRecording;
 use crate::video_decoder::VideoDecoder;
@@ -30,16 +31,16 @@ pub struct InputInfo {
     pub frames: Option<usize>,
     /// Still images: how many have each EXIF orientation (1-8), applied when decoded.
     pub orientations: std::collections::BTreeMap<u16, usize>,
-    kind: Kind,
+    pub(crate) kind: Kind,
     /// What the decoder had to say about damaged but readable stills (shared by the readers).
-    decode_warnings: DecodeWarnings,
+    pub(crate) decode_warnings: DecodeWarnings,
     /// Time the readers waited for decoded frames (shared by the readers).
-    reading: ReadClock,
+    pub(crate) reading: ReadClock,
 }
 
 /// Nanoseconds spent in [`FrameReader::next_frame`], over every reader of one input.
 #[derive(Debug, Clone, Default)]
-struct ReadClock(std::sync::Arc<std::sync::atomic::AtomicU64>);
+pub(crate) struct ReadClock(pub(crate) std::sync::Arc<std::sync::atomic::AtomicU64>);
 
 impl PartialEq for ReadClock {
     /// Time spent reading does not make two inputs different.
@@ -50,7 +51,7 @@ impl PartialEq for ReadClock {
 
 /// Warnings of every reader of one input, e.g. a JPEG cut short ("Premature end of JPEG file").
 #[derive(Debug, Clone, Default)]
-struct DecodeWarnings(std::sync::Arc<std::sync::Mutex<Vec<String>>>);
+pub(crate) struct DecodeWarnings(std::sync::Arc<std::sync::Mutex<Vec<String>>>);
 
 impl PartialEq for DecodeWarnings {
     /// What was decoded so far does not make two inputs different.
@@ -60,7 +61,7 @@ impl PartialEq for DecodeWarnings {
 }
 
 impl DecodeWarnings {
-    fn add(&self, warning: String) {
+    pub(crate) fn add(&self, warning: String) {
         let mut w = self.0.lock().unwrap_or_else(|e| e.into_inner());
         if !w.contains(&warning) {
             w.push(warning);
@@ -69,7 +70,7 @@ impl DecodeWarnings {
 }
 
 #[derive(Debug, Clone, PartialEq)]
-enum Kind {
+pub(crate) enum Kind {
     Video,
     Images(Vec<PathBuf>),
 }
@@ -380,113 +381,6 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         decode_warnings: DecodeWarnings::default(),
         reading: ReadClock::default(),
     })
-}
-
-enum Source {
-    Video(VideoDecoder),
-    Images(Vec<PathBuf>),
-    /// Frames decoded ahead by another reader on its own thread.
-    Ahead(std::sync::mpsc::Receiver<Result<Option<Frame>, PipelineError>>),
-}
-
-/// Frames decoded ahead of the caller: two full-HD frames are 12 MB.
-pub const READ_AHEAD: usize = 1;
-
-/// `inner`'s frames, read on a thread into a queue of [`READ_AHEAD`]. The
-/// thread ends at the end of the video, at an error, or when the receiver is
-/// dropped (the decoder with it).
-fn read_ahead(
-    mut inner: FrameReader,
-) -> std::sync::mpsc::Receiver<Result<Option<Frame>, PipelineError>> {
-    let (tx, rx) = std::sync::mpsc::sync_channel(READ_AHEAD);
-    std::thread::spawn(move || {
-        loop {
-            let frame = inner.read_frame();
-            let last = !matches!(frame, Ok(Some(_)));
-            if tx.send(frame).is_err() || last {
-                break;
-            }
-        }
-    });
-    rx
-}
-
-/// Yields frames in input order.
-pub struct FrameReader {
-    info: InputInfo,
-    source: Source,
-    next: usize,
-}
-
-impl FrameReader {
-    /// The next frame, `Ok(None)` at the end.
-    pub fn next_frame(&mut self) -> Result<Option<Frame>, PipelineError> {
-        let t = std::time::Instant::now();
-        let frame = self.read_frame();
-        let nanos = t.elapsed().as_nanos() as u64;
-        self.info
-            .reading
-            .0
-            .fetch_add(nanos, std::sync::atomic::Ordering::Relaxed);
-        frame
-    }
-
-    fn read_frame(&mut self) -> Result<Option<Frame>, PipelineError> {
-        let index = self.next;
-        let image = match &mut self.source {
-            Source::Ahead(rx) => {
-                // A closed queue: the thread ended after the last frame or an error it sent.
-                return rx.recv().unwrap_or(Ok(None));
-            }
-            Source::Images(files) => {
-                let Some(path) = files.get(index) else {
-                    return Ok(None);
-                };
-                let still = still::read(path).map_err(|e| PipelineError::input(path, e))?;
-                if let Some(w) = still.warning {
-                    let name = path.file_name().unwrap_or_default().to_string_lossy();
-                    self.info.decode_warnings.add(format!(
-                        "{name}: damaged JPEG, decoded as OpenCV does ({w})"
-                    ));
-                }
-                let img = still.image;
-                if (img.width(), img.height()) != (self.info.width, self.info.height) {
-                    return Err(PipelineError::input(
-                        path,
-                        format!(
-                            "image is {}x{} but the first image is {}x{}; all frames must have one size",
-                            img.width(),
-                            img.height(),
-                            self.info.width,
-                            self.info.height
-                        ),
-                    ));
-                }
-                img
-            }
-            Source::Video(decoder) => {
-                let mut buf = vec![0u8; self.info.width as usize * self.info.height as usize * 3];
-                match decoder.read_frame(&mut buf)? {
-                    0 => {
-                        decoder.finish(index)?;
-                        return Ok(None);
-                    }
-                    n if n < buf.len() => {
-                        return Err(PipelineError::input(
-                            &self.info.path,
-                            format!("frame {index} is truncated; the video is damaged"),
-                        ));
-                    }
-                    _ => {}
-                }
-                image::RgbImage::from_raw(self.info.width, self.info.height, buf).ok_or_else(
-                    || PipelineError::input(&self.info.path, "frame buffer size mismatch"),
-                )?
-            }
-        };
-        self.next += 1;
-        Ok(Some(Frame::new(index, image)))
-    }
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ mod driver;
 pub mod edges;
 mod error;
 pub mod folder_lock;
+mod frame_reader;
 pub mod input;
 pub mod interpolate;
 pub mod manifest;
