@@ -27,40 +27,32 @@ fn toml_syntax_error() {
 #[test]
 fn unknown_stage_kind_lists_the_choices() {
     let dir = tempfile::tempdir().unwrap();
-    fails_with(
-        gait()
-            .args([
-                "run",
-                "--no-progress",
-                "--set",
-                "edge.kind=sobelx",
-                "--input",
-            ])
-            .arg(common::sample_video())
-            .arg("--out")
-            .arg(dir.path().join("out")),
-        &["--set edge.kind=sobelx", "edge.kind", "sobelx", "none"],
-    );
-    fails_with(
-        gait()
-            .args([
-                "run",
-                "--no-progress",
-                "--set",
-                "pose.backend=tensorrt",
-                "--input",
-            ])
-            .arg(common::sample_video())
-            .arg("--out")
-            .arg(dir.path().join("out")),
-        &[
-            "--set pose.backend=tensorrt",
-            "pose.backend",
-            "tensorrt",
-            "candle",
-            "ort",
-        ],
-    );
+    let cases: [(&str, &[&str]); 2] = [
+        (
+            "edge.kind=sobelx",
+            &["--set edge.kind=sobelx", "edge.kind", "sobelx", "none"],
+        ),
+        (
+            "pose.backend=tensorrt",
+            &[
+                "--set pose.backend=tensorrt",
+                "pose.backend",
+                "tensorrt",
+                "candle",
+                "ort",
+            ],
+        ),
+    ];
+    for (set, words) in cases {
+        fails_with(
+            gait()
+                .args(["run", "--no-progress", "--set", set, "--input"])
+                .arg(common::sample_video())
+                .arg("--out")
+                .arg(dir.path().join("out")),
+            words,
+        );
+    }
 }
 
 /// Every config error names `table.key` and the place the value came from: the `--set`

@@ -348,15 +348,7 @@ fn planted_deviations_under_pose_model_noise() {
     for trial in ["fukuchi2018", "gaitkit_pd"] {
         let subject = common::read_json(&data.join(trial).join("subject.json"));
         let height = subject["leg_length_cm"].as_f64().unwrap() / 100.0 / 0.491;
-        for case in [
-            "none",
-            "trunk_lean_10",
-            "wide_base_10",
-            "circumduction_10",
-            "hip_hike_10",
-            "knee_flexed_15",
-            "vaulting_6",
-        ] {
+        for case in std::iter::once("none").chain(REQUIRED) {
             let src = data.join(trial).join(case);
             if !src.is_dir() {
                 continue;

@@ -352,12 +352,14 @@ impl Driver<'_> {
                 continue;
             }
             let is_last = ahead.is_none();
+            // After the subject's last frame every pose is empty: no need to decode on.
+            let stop = self.stop_after.filter(|s| s.0 == frame.index);
             bar.tick()?;
             all.push(frame.index);
             if pick(frame.index, is_last) {
                 batch.push(frame);
             }
-            if batch.len() == batch_size || (is_last && !batch.is_empty()) {
+            if batch.len() == batch_size || ((is_last || stop.is_some()) && !batch.is_empty()) {
                 let poses = self.process(&batch)?;
                 out.extend(batch.iter().map(|f| f.index).zip(poses));
                 // The frames a stateful stage may have to see again (a corrupt saved state):
@@ -368,30 +370,16 @@ impl Driver<'_> {
             if is_last {
                 break;
             }
-            if let Some((stop, end)) = self.stop_after.filter(|s| frame_index_done(&all, s.0)) {
-                if !batch.is_empty() {
-                    let poses = self.process(&batch)?;
-                    out.extend(batch.iter().map(|f| f.index).zip(poses));
-                }
+            if let Some((stop, end)) = stop {
                 // The rest, as an uninterrupted pass would give it: empty poses (nobody to follow).
-                let rest = stop + 1..=end;
-                let picked: Vec<usize> = rest.clone().filter(|&f| pick(f, f == end)).collect();
-                all.extend(rest);
-                out.extend(
-                    picked
-                        .into_iter()
-                        .map(|f| (f, Pose::empty(self.n_keypoints))),
-                );
+                let picked = (stop + 1..=end).filter(|&f| pick(f, f == end));
+                out.extend(picked.map(|f| (f, Pose::empty(self.n_keypoints))));
+                all.extend(stop + 1..=end);
                 break;
             }
         }
         Ok((all, out, self.cached_frames))
     }
-}
-
-/// Whether the pass has read frame `index` (the last one read is it).
-fn frame_index_done(all: &[usize], index: usize) -> bool {
-    all.last() == Some(&index)
 }
 
 pub(crate) fn bad_output(stage: &str, expected: &str) -> PipelineError {

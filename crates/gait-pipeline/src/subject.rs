@@ -2,19 +2,17 @@
 //! estimator's detector, cached per frame), linked into tracks, one chosen
 //! (gait-subject). The pose passes then follow that track only.
 
-use crate::progress::Progress;
-use gait_core::{Frame, PoseEstimator};
-use gait_subject::{Appearance, Sighting, Subject};
+use std::path::Path;
 use std::time::Instant;
 
-use std::path::Path;
-
-use gait_core::StageContext;
+use gait_core::{Frame, PoseEstimator, StageContext};
+use gait_subject::{Appearance, Sighting, Subject};
 
 use crate::cache::StageCache;
 use crate::input::InputInfo;
 use crate::manifest::StageRecord;
 use crate::plan::{self, Models};
+use crate::progress::Progress;
 use crate::registry;
 use crate::{PipelineConfig, PipelineError};
 

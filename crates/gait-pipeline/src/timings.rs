@@ -3,11 +3,15 @@
 //! from its own folder.
 
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use serde::Serialize;
 
 static PROCESS_START: OnceLock<Instant> = OnceLock::new();
+/// Whether a run of this process has counted the start-up already: `gait batch`,
+/// `gait visit` and Python run several in one process, and only the first had it.
+static START_TAKEN: AtomicBool = AtomicBool::new(false);
 
 /// Marks the start of the process (call first thing in `main`), so the
 /// start-up before a run (arguments, config) is counted too.
@@ -26,22 +30,34 @@ pub struct Step {
     pub seconds: f64,
 }
 
-/// The steps of a run, with the total from the process start and the rest
-/// no step accounts for.
+/// The steps of a run, with its total and the rest no step accounts for.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Timings {
     pub steps: Vec<Step>,
     pub total_s: f64,
     pub unaccounted_s: f64,
+    /// Where the total counts from.
+    #[serde(skip)]
+    origin: Option<Instant>,
 }
 
 impl Timings {
-    /// Timings that start with the time from the process start to now.
+    /// Timings of a run starting now; the first run of the process also
+    /// counts the time from the process start (arguments, config).
     pub fn from_process_start() -> Self {
-        let mut t = Self::default();
+        let first = !START_TAKEN.swap(true, Ordering::Relaxed);
+        let origin = if first {
+            process_start()
+        } else {
+            Instant::now()
+        };
+        let mut t = Self {
+            origin: Some(origin),
+            ..Self::default()
+        };
         t.add(
             "start-up (arguments, config)",
-            process_start().elapsed().as_secs_f64(),
+            origin.elapsed().as_secs_f64(),
         );
         t
     }
@@ -72,9 +88,9 @@ impl Timings {
         );
     }
 
-    /// Sets the total to the time since the process started.
+    /// Sets the total to the time since the run (or, for the first, the process) started.
     pub fn close(&mut self) {
-        self.total_s = process_start().elapsed().as_secs_f64();
+        self.total_s = self.origin.map_or(0.0, |o| o.elapsed().as_secs_f64());
         let sum: f64 = self.steps.iter().map(|s| s.seconds).sum();
         self.unaccounted_s = (self.total_s - sum).max(0.0);
     }
@@ -97,6 +113,16 @@ mod tests {
         assert!(t.unaccounted_s >= 0.03, "{t:?}");
         let sum: f64 = t.steps.iter().map(|s| s.seconds).sum();
         assert!((t.total_s - sum - t.unaccounted_s).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_later_run_of_the_process_counts_from_its_own_start() {
+        let _first = Timings::from_process_start();
+        std::thread::sleep(std::time::Duration::from_millis(30));
+        let mut second = Timings::from_process_start();
+        second.close();
+        assert!(second.steps[0].seconds < 0.02, "{second:?}");
+        assert!(second.total_s < 0.02, "{second:?}");
     }
 
     #[test]

@@ -87,6 +87,16 @@ impl Track {
         [x + vx * dt, y + vy * dt]
     }
 
+    /// How far `s` lies from where this track predicts it (in body sizes), and
+    /// how far it may: the prediction grows uncertain with the gap (a walker
+    /// covers about 0.02 body sizes a frame, a runner 0.07).
+    fn offset(&self, s: &Sighting) -> (f32, f32) {
+        let dt = s.frame.saturating_sub(self.last().frame);
+        let p = self.predict(s.frame);
+        let d = (p[0] - s.person.centre[0]).hypot(p[1] - s.person.centre[1]);
+        (d / self.size().max(1.0), (0.2 + 0.04 * dt as f32).min(1.0))
+    }
+
     fn appearance(&self) -> Appearance {
         Appearance::mean(self.recent(10).map(|s| &s.appearance))
     }
@@ -99,11 +109,7 @@ impl Track {
             return None;
         }
         let size = self.size().max(1.0);
-        let p = self.predict(s.frame);
-        let d = (p[0] - s.person.centre[0]).hypot(p[1] - s.person.centre[1]) / size;
-        // The prediction grows uncertain with the gap; a walker covers about
-        // 0.02 body sizes a frame, a runner 0.07.
-        let reach = (0.2 + 0.04 * dt as f32).min(1.0);
+        let (d, reach) = self.offset(s);
         let ratio = (s.person.size().max(1.0) / size).ln().abs();
         if d > reach || ratio > limits.max_size_ratio.ln() {
             return None;
@@ -238,10 +244,8 @@ fn continues(a: &Track, b: &Track, limits: &LinkLimits) -> bool {
     if start.frame <= end.frame || start.frame - end.frame > limits.short_gap_frames + 1 {
         return false;
     }
+    let (d, reach) = a.offset(start);
     let size = a.size().max(1.0);
-    let p = a.predict(start.frame);
-    let d = (p[0] - start.person.centre[0]).hypot(p[1] - start.person.centre[1]) / size;
-    let reach = 0.2 + 0.04 * (start.frame - end.frame) as f32;
     let early = Track {
         sightings: b.sightings.iter().take(5).copied().collect(),
     };
