@@ -96,15 +96,15 @@ fn item_of(case: &str) -> &'static str {
     }
 }
 
-/// The larger size of each deviation, which must be found (the shorter stance is reported, not
-/// required: a stance 10 % shorter moves the symmetry index to about the 10 % threshold).
-const REQUIRED: [&str; 6] = [
+/// The larger size of each deviation (the stance's only size), which must be found.
+const REQUIRED: [&str; 7] = [
     "trunk_lean_10",
     "wide_base_10",
     "circumduction_10",
     "hip_hike_10",
     "knee_flexed_15",
     "vaulting_6",
+    "short_stance_10",
 ];
 
 #[test]
@@ -367,7 +367,7 @@ fn planted_deviations_under_pose_model_noise() {
                     "{trial} {case} seed {}: on the left {left:?}",
                     seed + 1
                 );
-                if case != "none" {
+                if case != "none" && case != "short_stance_10" {
                     let item = format!("{} (right)", item_of(case));
                     assert!(
                         f.contains(&item),
@@ -375,6 +375,14 @@ fn planted_deviations_under_pose_model_noise() {
                         seed + 1
                     );
                 }
+            }
+            // A stance 10 % shorter is 2 frames at 30 fps, over the 2-3 strides a side of these
+            // trials; with the jitter the swing:stance ratio of the unmodified walk already
+            // spreads over 0.93-1.08 (BENCHMARKS.md): found in 2 of 3 seeds is what holds.
+            if case == "short_stance_10" {
+                let item = format!("{} (right)", item_of(case));
+                let seen = found.iter().filter(|f| f.contains(&item)).count();
+                assert!(seen >= 2, "{trial} {case}: {item} in {seen} of 3 seeds");
             }
         }
     }

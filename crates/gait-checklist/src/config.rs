@@ -27,8 +27,12 @@ pub struct ChecklistConfig {
     pub circumduction_cm: f64,
     /// The same in leg lengths.
     pub circumduction_leg: f64,
-    /// Uneven step time, stance time or step length: a symmetry index beyond this (%).
+    /// Uneven step time or step length: a symmetry index beyond this (%).
     pub symmetry_pct: f64,
+    /// Uneven stance time: the side's swing:stance over the other side's beyond this. Patterson
+    /// et al. 2008 (Arch Phys Med Rehabil 89:304) give 0.9-1.1 as the normative range, the 95 %
+    /// CI of 24 healthy adults walking overground.
+    pub temporal_ratio: f64,
     /// Vaulting: the other heel's rise during the side's early and mid swing beyond the same
     /// rise during the other side's swing, in leg lengths (0.04: about 3.4 cm over a 0.84 m leg).
     pub vaulting_leg: f64,
@@ -44,6 +48,7 @@ impl Default for ChecklistConfig {
             circumduction_cm: 5.0,
             circumduction_leg: 0.06,
             symmetry_pct: 10.0,
+            temporal_ratio: 1.1,
             vaulting_leg: 0.04,
         }
     }
@@ -59,6 +64,7 @@ impl ChecklistConfig {
             ("circumduction_cm", self.circumduction_cm),
             ("circumduction_leg", self.circumduction_leg),
             ("symmetry_pct", self.symmetry_pct),
+            ("temporal_ratio", self.temporal_ratio),
             ("vaulting_leg", self.vaulting_leg),
         ] {
             if !(v.is_finite() && v > 0.0) {

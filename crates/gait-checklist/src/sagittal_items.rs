@@ -19,7 +19,7 @@ pub const STEP_TIME: Item = Item {
 pub const STANCE: Item = Item {
     id: "uneven_stance_time",
     name: "Uneven stance time",
-    measure: "stance (% of the stride); present on the longer side when the symmetry index passes the threshold",
+    measure: "stance (% of the stride); judged by the temporal symmetry ratio (swing / stance of the side) / (swing / stance of the other side): present on the side with the shorter stance when the ratio passes the threshold",
     unit: "%",
     view: "side",
     amputation: "both",
@@ -84,6 +84,46 @@ fn symmetry(run: &RunFiles, item: Item, parameter: &str, cfg: &ChecklistConfig) 
     })
 }
 
+/// Uneven stance time: Patterson et al.'s temporal symmetry ratio, the side's swing:stance over
+/// the other side's. It is judged instead of a symmetry index of stance itself because a shorter
+/// stance lengthens the same side's swing: the ratio sees both, so a stance 10 % shorter passes
+/// 1.1 where the stance's own index stays near 5 % (tools/visit, BENCHMARKS.md).
+fn stance_ratio(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
+    let row = |s: Side| {
+        run.param("stance", s.name())
+            .filter(|p| p.mean.is_finite() && p.mean > 0.0 && p.mean < 100.0)
+    };
+    let (Some(l), Some(r)) = (row(Side::Left), row(Side::Right)) else {
+        let why = "needs accepted cycles of both sides";
+        return Side::BOTH.map(|s| Verdict::not_assessable(STANCE, s, why));
+    };
+    let swing_over_stance = |stance: f64| (100.0 - stance) / stance;
+    let (wl, wr) = (swing_over_stance(l.mean), swing_over_stance(r.mean));
+    Side::BOTH.map(|side| {
+        let (own, ratio) = match side {
+            Side::Left => (l, wl / wr),
+            Side::Right => (r, wr / wl),
+        };
+        let mut v = Verdict::not_assessable(STANCE, side, "");
+        v.status = if ratio > cfg.temporal_ratio {
+            Status::Present
+        } else {
+            Status::Absent
+        };
+        v.value = own.mean;
+        v.spread = own.sd;
+        v.n = own.n;
+        v.unit = own.unit.clone();
+        v.threshold = cfg.temporal_ratio;
+        v.threshold_unit = "swing:stance ratio".into();
+        v.source = format!(
+            "checklist.temporal_ratio (Patterson et al. 2008: 0.9-1.1 in 24 healthy adults), on the swing:stance ratio over the other side's (here {ratio:.3})"
+        );
+        v.reason.clear();
+        v
+    })
+}
+
 /// Per accepted cycle of `side`, the knee's extreme over `range` (% of the cycle).
 fn knee(
     run: &RunFiles,
@@ -122,13 +162,9 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig, norm: Option<&Normative>) -
             .collect();
     }
     let mut out = Vec::new();
-    for (item, p) in [
-        (STEP_TIME, "step_time"),
-        (STANCE, "stance"),
-        (STEP_LENGTH, "step_length"),
-    ] {
-        out.extend(symmetry(run, item, p, cfg));
-    }
+    out.extend(symmetry(run, STEP_TIME, "step_time", cfg));
+    out.extend(stance_ratio(run, cfg));
+    out.extend(symmetry(run, STEP_LENGTH, "step_length", cfg));
     let curve = norm.and_then(|n| n.curve("knee"));
     let k = cfg.norm_sd;
     for side in Side::BOTH {

@@ -187,11 +187,7 @@ mod tests {
 
     #[test]
     fn strides_and_resampling() {
-        let hs = |side, frame| Event {
-            side,
-            event: EventKind::HeelStrike,
-            frame,
-        };
+        let hs = |side, frame| Event::on_frame(side, EventKind::HeelStrike, frame);
         let ev = [
             hs(Side::Left, 10),
             hs(Side::Left, 40),

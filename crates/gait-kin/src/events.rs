@@ -32,6 +32,34 @@ pub struct Event {
     pub side: Side,
     pub event: EventKind,
     pub frame: usize,
+    /// Where between frames the event fell (input frames, within half a frame of `frame`),
+    /// when the detector interpolates its threshold crossing; `None` for events placed on a
+    /// frame (a user's CSV, a correction, an extremum). Durations use it: at 30 fps a frame is
+    /// 5 % of a stance, so whole frames alone tip a stance-time ratio or a stride time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<f64>,
+}
+
+impl Event {
+    /// An event placed on a frame.
+    pub fn on_frame(side: Side, event: EventKind, frame: usize) -> Self {
+        Self {
+            side,
+            event,
+            frame,
+            at: None,
+        }
+    }
+
+    /// The event's time in input frames, sub-frame where known.
+    pub fn time(&self) -> f64 {
+        self.at.unwrap_or(self.frame as f64)
+    }
+
+    /// What identifies an event, whatever its sub-frame time.
+    pub fn key(&self) -> (Side, EventKind, usize) {
+        (self.side, self.event, self.frame)
+    }
 }
 
 /// The keypoints a foot's events are taken from: heel strikes from the heel and toe-offs from
@@ -240,8 +268,8 @@ impl ZeniRefined {
             }
         };
         let steps = (self.refine_s * fps).round() as usize;
-        // The frame nearest where the foot speed crosses `target`, rising or falling in time,
-        // searched from `p` forwards or backwards for `steps` frames.
+        // Where the foot speed crosses `target` (linearly between the two frames around it),
+        // rising or falling in time, searched from `p` forwards or backwards for `steps` frames.
         let crossing = |j: usize, p: usize, target: f64, rising: bool, forward: bool| {
             for k in 0..steps {
                 let (a, b) = if forward {
@@ -262,8 +290,7 @@ impl ZeniRefined {
                     va > target && vb <= target
                 };
                 if crossed {
-                    let f = (va - target) / (va - vb);
-                    return Some(if f < 0.5 { a } else { b });
+                    return Some((a, (va - target) / (va - vb)));
                 }
             }
             None
@@ -272,9 +299,9 @@ impl ZeniRefined {
         let heel_strike = |p: usize| {
             let vp = walking_speed(p);
             if self.speed_fraction >= 1.0 || !(vp.is_finite() && vp > 0.0) {
-                return p;
+                return None;
             }
-            crossing(heel, p, self.speed_fraction * vp, false, true).unwrap_or(p)
+            crossing(heel, p, self.speed_fraction * vp, false, true)
         };
         // Toe-off: where the toe's speed rises through `toe_speed_fraction`, searched from the
         // extremum towards the side where the toe is on the wrong side of it.
@@ -283,7 +310,7 @@ impl ZeniRefined {
             let v0 = speed(toe, p);
             if !(self.toe_speed_fraction > 0.0 && vp.is_finite() && vp > 0.0 && v0.is_finite()) {
                 // 0 keeps Zeni's extremum for the ankle too.
-                return p;
+                return None;
             }
             let frac = if t.names[toe].ends_with("_ankle") {
                 self.ankle_toe_speed_fraction
@@ -291,7 +318,18 @@ impl ZeniRefined {
                 self.toe_speed_fraction
             };
             let target = frac * vp;
-            crossing(toe, p, target, true, v0 <= target).unwrap_or(p)
+            crossing(toe, p, target, true, v0 <= target)
+        };
+        // At the crossing, else at Zeni's extremum.
+        let event = |event, p: usize, crossed: Option<(usize, f64)>| match crossed {
+            // On the nearer frame, and the crossing itself in `at`.
+            Some((a, f)) => Event {
+                side,
+                event,
+                frame: t.first_frame + a + usize::from(f >= 0.5),
+                at: Some((t.first_frame + a) as f64 + f),
+            },
+            None => Event::on_frame(side, event, t.first_frame + p),
         };
         let stable = |p: usize| {
             let w = (0.1 * fps).round() as usize;
@@ -308,20 +346,12 @@ impl ZeniRefined {
         ];
         for &Peak { index: p, .. } in &heel_peaks.kept {
             if stable(p) {
-                out.push(Event {
-                    side,
-                    event: EventKind::HeelStrike,
-                    frame: t.first_frame + heel_strike(p),
-                });
+                out.push(event(EventKind::HeelStrike, p, heel_strike(p)));
             }
         }
         for &Peak { index: p, .. } in &toe_peaks.kept {
             if stable(p) {
-                out.push(Event {
-                    side,
-                    event: EventKind::ToeOff,
-                    frame: t.first_frame + toe_off(p),
-                });
+                out.push(event(EventKind::ToeOff, p, toe_off(p)));
             }
         }
         (out, margins)
@@ -444,7 +474,7 @@ mod tests {
 
     #[test]
     fn toe_offs_right_after_their_heel_strike_are_dropped() {
-        let ev = |side, event, frame| Event { side, event, frame };
+        let ev = Event::on_frame;
         let (l, r, hs, to) = (
             Side::Left,
             Side::Right,

@@ -49,7 +49,7 @@ pub fn read_csv(path: &Path) -> Result<Vec<Event>, KinError> {
                 get(cf)
             ))
         })?;
-        out.push(Event { side, event, frame });
+        out.push(Event::on_frame(side, event, frame));
     }
     sort(&mut out);
     Ok(out)
@@ -69,14 +69,7 @@ mod tests {
         )
         .unwrap();
         let ev = read_csv(&p).unwrap();
-        assert_eq!(
-            ev[0],
-            Event {
-                side: Side::Left,
-                event: EventKind::HeelStrike,
-                frame: 3
-            }
-        );
+        assert_eq!(ev[0], Event::on_frame(Side::Left, EventKind::HeelStrike, 3));
         std::fs::write(&p, "side,event,frame\nleft,foot_flat,3\n").unwrap();
         let e = read_csv(&p).unwrap_err().to_string();
         assert!(e.contains("foot_flat") && e.contains("line 2"), "{e}");

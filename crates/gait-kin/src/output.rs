@@ -80,7 +80,7 @@ fn events(r: &KinResult) -> Table {
         .with("side", texts(e.iter().map(|e| e.side.name())))
         .with("event", texts(e.iter().map(|e| e.event.name())))
         .with("frame", ints(e.iter().map(|e| e.frame)))
-        .with("time_s", nums(e.iter().map(|e| e.frame as f64 / r.fps)))
+        .with("time_s", nums(e.iter().map(|e| e.time() / r.fps)))
 }
 
 fn bouts(r: &KinResult) -> Table {

@@ -79,6 +79,13 @@ pub fn compute(
             .or_else(|| t.leg_index(side, "ankle"))?;
         t.at(j, i).map(|p| p.0)
     };
+    // Durations from the events' sub-frame times where the detector has them.
+    let heel_strike_at = |side: Side, frame: usize| {
+        events
+            .iter()
+            .find(|e| e.key() == (side, EventKind::HeelStrike, frame))
+            .map_or(frame as f64, Event::time)
+    };
     let mut per_side: Vec<(Side, [Vec<f64>; 6])> = Vec::new();
     for side in Side::BOTH {
         let mut stride_t = Vec::new();
@@ -86,7 +93,8 @@ pub fn compute(
         let mut stride_len = Vec::new();
         let mut speed = Vec::new();
         for s in strides.iter().filter(|s| s.side == side) {
-            let dur = (s.end - s.start) as f64 / fps;
+            let (t0, t1) = (heel_strike_at(side, s.start), heel_strike_at(side, s.end));
+            let dur = (t1 - t0) / fps;
             stride_t.push(dur);
             if let Some(to) = events.iter().find(|e| {
                 e.side == side
@@ -94,7 +102,7 @@ pub fn compute(
                     && e.frame > s.start
                     && e.frame < s.end
             }) {
-                stance.push(100.0 * (to.frame - s.start) as f64 / (s.end - s.start) as f64);
+                stance.push(100.0 * (to.time() - t0) / (t1 - t0));
             }
             if let (Some(a), Some(b)) = (heel_x(side, s.start), heel_x(side, s.end)) {
                 let l = (b - a).abs() / per;
@@ -113,7 +121,7 @@ pub fn compute(
             if w[1].side == side && w[0].side != side && step_ok(w[0].frame, w[1].frame) {
                 let dur = (w[1].frame - w[0].frame) as f64 / fps;
                 if dur > 0.0 && dur <= cfg.max_stride_s / 2.0 {
-                    step_t.push(dur);
+                    step_t.push((w[1].time() - w[0].time()) / fps);
                     if let (Some(a), Some(b)) =
                         (heel_x(side, w[1].frame), heel_x(side.other(), w[1].frame))
                     {

@@ -274,11 +274,7 @@ fn events_by_hand_and_excluded_frames() {
                 && e.frame != third
         })
         .collect();
-    expect.push(Event {
-        side: Side::Right,
-        event: EventKind::ToeOff,
-        frame: 190,
-    });
+    expect.push(Event::on_frame(Side::Right, EventKind::ToeOff, 190));
     events::sort(&mut expect);
     assert_eq!(r.events, expect);
     // The left strides now run first -> fourth heel strike (too long: no candidate) and

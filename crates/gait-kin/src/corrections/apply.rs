@@ -97,14 +97,11 @@ pub(crate) fn apply_events(
         c.event
             .iter()
             .filter(|e| e.action == EventAction::Add)
-            .map(|e| Event {
-                side: e.side,
-                event: e.kind,
-                frame: e.frame,
-            }),
+            .map(|e| Event::on_frame(e.side, e.kind, e.frame)),
     );
     events::sort(events);
-    events.dedup();
+    // An added event where one was detected keeps the detected one (sorted first).
+    events.dedup_by_key(|e| e.key());
     Ok(())
 }
 
@@ -201,7 +198,7 @@ mod tests {
     use crate::tracks::LEG;
 
     fn ev(side: Side, event: EventKind, frame: usize) -> Event {
-        Event { side, event, frame }
+        Event::on_frame(side, event, frame)
     }
 
     fn edit(

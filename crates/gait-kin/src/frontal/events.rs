@@ -63,11 +63,7 @@ pub fn detect(t: &Tracks, scale: &Scale, min_stride_s: f64) -> (Vec<Event>, Vec<
                     EventKind::HeelStrike => a,
                     EventKind::ToeOff => b,
                 });
-            events.extend(frames.map(|i| Event {
-                side,
-                event: kind,
-                frame: t.first_frame + i,
-            }));
+            events.extend(frames.map(|i| Event::on_frame(side, kind, t.first_frame + i)));
         }
     }
     events.sort_by_key(|e| (e.frame, e.side == Side::Right, e.event));
