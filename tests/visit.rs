@@ -44,8 +44,13 @@ fn visit(case: &Path, height_m: f64, work: &Path) -> BTreeSet<String> {
 
 /// [`visit`] of keypoints at `fps`.
 fn visit_at(case: &Path, height_m: f64, work: &Path, fps: f64) -> BTreeSet<String> {
+    visit_of(case, &VIEWS, height_m, work, fps)
+}
+
+/// The visit of the `views` of one case (`case/VIEW/keypoints.csv`) at `fps`.
+fn visit_of(case: &Path, views: &[&str], height_m: f64, work: &Path, fps: f64) -> BTreeSet<String> {
     let mut passes = Vec::new();
-    for view in VIEWS {
+    for &view in views {
         let keypoints = case.join(view).join("keypoints.csv");
         let dir = work.join(view);
         run_ok(
@@ -307,6 +312,50 @@ fn progress_calls_the_planted_change_and_nothing_on_the_other_side() {
     ] {
         assert!(html.contains(part), "progress.html lacks {part}");
     }
+}
+
+/// Two visits made of the two halves of one long walk (the 12 s treadmill trial of
+/// tests/data/gaitalytics_treadmill, 100 Hz, seen from the right: 5-6 cycles a side in each
+/// half) are the same patient on the same day: progress must call no change on any item.
+#[test]
+fn progress_between_two_halves_of_one_walk_calls_no_change() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let src = root.join("tests/data/gaitalytics_treadmill/keypoints.csv");
+    let seq = gait_core::dlc::read(std::fs::File::open(&src).unwrap(), None, 100.0).unwrap();
+    let work = tempfile::tempdir().unwrap();
+    let half = seq.poses.len() / 2;
+    let mut visits = Vec::new();
+    for (name, range) in [("first", 0..half), ("second", half..seq.poses.len())] {
+        let mut part = seq.clone();
+        part.poses = seq.poses[range.clone()].to_vec();
+        part.frames = (0..part.poses.len()).collect();
+        let case = work.path().join(name);
+        std::fs::create_dir_all(case.join("right")).unwrap();
+        let w = std::fs::File::create(case.join("right/keypoints.csv")).unwrap();
+        gait_core::dlc::write(w, "half", &part).unwrap();
+        let runs = work.path().join(format!("{name}-runs"));
+        let found = visit_of(&case, &["right"], 1.75, &runs, 100.0);
+        println!("{name} half: present {found:?}");
+        visits.push(runs.join("visit"));
+    }
+    let out = work.path().join("progress");
+    run_ok(gait().arg("progress").args(&visits).arg("--out").arg(&out));
+    let mut r = csv::Reader::from_path(out.join("progress.csv")).unwrap();
+    let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+    for x in &rows {
+        println!("{}", x.iter().collect::<Vec<_>>().join(", "));
+    }
+    let judged = rows.iter().filter(|x| &x[7] == "no change").count();
+    let changes: Vec<String> = rows
+        .iter()
+        .filter(|x| &x[7] == "change")
+        .map(|x| format!("{} {} {}", &x[0], &x[1], &x[4]))
+        .collect();
+    assert!(
+        changes.is_empty(),
+        "changes between the halves: {changes:?}"
+    );
+    assert!(judged >= 6, "only {judged} items judged: {rows:?}");
 }
 
 /// A case's four views as 30 fps videos (every 5th frame) with BlazePose-level jitter: 1 px
