@@ -42,8 +42,9 @@ def load(folder, fps, offset_s=0.0, mirrored=False, scale=1.0):
     d = pathlib.Path(folder)
     side = (lambda s: OTHER.get(s, s)) if mirrored else (lambda s: s)
     t = lambda frame: int(frame) / fps + offset_s  # noqa: E731
-    # time_s is the event's sub-frame time where the detector interpolates it.
-    events = [(side(r["side"]), r["event"], float(r["time_s"]) + offset_s) for r in rows(d / "events.csv")]
+    # Events on their frames, as the target counts them ("within 1 frame of 30 fps");
+    # the durations in spatiotemporal.csv use the sub-frame times (events.csv's time_s).
+    events = [(side(r["side"]), r["event"], t(r["frame"])) for r in rows(d / "events.csv")]
     bouts = [(t(r["first"]), t(r["last"])) for r in rows(d / "bouts.csv")]
     cycles, rejected = [], []
     for r in rows(d / "cycle_quality.csv"):
