@@ -33,6 +33,16 @@ pub struct ChecklistConfig {
     /// et al. 2008 (Arch Phys Med Rehabil 89:304) give 0.9-1.1 as the normative range, the 95 %
     /// CI of 24 healthy adults walking overground.
     pub temporal_ratio: f64,
+    /// Excessive trunk flexion: the trunk's mean forward lean over a stride (degrees).
+    pub trunk_flexion_deg: f64,
+    /// Uneven arm swing: a symmetry index of the two arms' swing beyond this (%).
+    pub arm_swing_pct: f64,
+    /// Terminal swing impact: the knee's fastest terminal extension this many times the other
+    /// side's.
+    pub impact_ratio: f64,
+    /// Medial or lateral whip: the heel's sideways shift against the toe around toe-off, seen
+    /// from behind, in leg lengths (0.05: about 4 cm over a 0.84 m leg).
+    pub whip_leg: f64,
     /// Vaulting: the other heel's rise during the side's early and mid swing beyond the same
     /// rise during the other side's swing, in leg lengths (0.04: about 3.4 cm over a 0.84 m leg).
     pub vaulting_leg: f64,
@@ -50,6 +60,10 @@ impl Default for ChecklistConfig {
             symmetry_pct: 10.0,
             temporal_ratio: 1.1,
             vaulting_leg: 0.04,
+            trunk_flexion_deg: 10.0,
+            arm_swing_pct: 50.0,
+            impact_ratio: 2.0,
+            whip_leg: 0.05,
         }
     }
 }
@@ -66,6 +80,10 @@ impl ChecklistConfig {
             ("symmetry_pct", self.symmetry_pct),
             ("temporal_ratio", self.temporal_ratio),
             ("vaulting_leg", self.vaulting_leg),
+            ("trunk_flexion_deg", self.trunk_flexion_deg),
+            ("arm_swing_pct", self.arm_swing_pct),
+            ("impact_ratio", self.impact_ratio),
+            ("whip_leg", self.whip_leg),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(ChecklistError::Config(format!(

@@ -4,7 +4,7 @@
 //! transtibial lists): each is judged by a named measure against a threshold with its source
 //! (a normative band ± `checklist.norm_sd` SD, or a documented default in `[checklist]`), per
 //! side: present, absent, or not assessable with the reason (the view it needs, too few
-//! cycles, a measure gait does not take yet). [`assess`] reads a run folder's files, so any
+//! cycles, the keypoints it needs). [`assess`] reads a run folder's files, so any
 //! run's checklist can be made again from them; checklist.csv and the report's section are
 //! written from its [`Checklist`].
 
@@ -14,8 +14,10 @@ mod html;
 mod judge;
 mod run_files;
 mod sagittal_items;
+mod trunk_arms;
 mod vaulting;
 mod verdict;
+mod whip;
 
 use std::path::Path;
 
@@ -33,35 +35,6 @@ pub enum ChecklistError {
     Config(String),
     #[error("{0}")]
     Input(String),
-}
-
-/// Items of the lists that gait does not measure yet: always "not assessable", so the
-/// checklist shows the whole list, not only what is easy.
-const UNMEASURED: [Item; 5] = [
-    unmeasured("terminal_swing_impact", "Terminal swing impact", "side"),
-    unmeasured("foot_slap", "Foot slap", "side"),
-    unmeasured(
-        "medial_lateral_whip",
-        "Medial or lateral whip at toe-off",
-        "front or back",
-    ),
-    unmeasured(
-        "excessive_trunk_flexion",
-        "Excessive trunk flexion or lordosis",
-        "side",
-    ),
-    unmeasured("uneven_arm_swing", "Uneven arm swing", "side"),
-];
-
-const fn unmeasured(id: &'static str, name: &'static str, view: &'static str) -> Item {
-    Item {
-        id,
-        name,
-        measure: "",
-        unit: "",
-        view,
-        amputation: "both",
-    }
 }
 
 /// A run's checklist.
@@ -97,15 +70,8 @@ pub fn assess(
     }
     verdicts.extend(sagittal_items::assess(&run, cfg, norm));
     verdicts.extend(vaulting::assess(&run, cfg));
-    for item in UNMEASURED {
-        for side in Side::BOTH {
-            verdicts.push(Verdict::not_assessable(
-                item,
-                side,
-                "not measured by gait yet",
-            ));
-        }
-    }
+    verdicts.extend(trunk_arms::assess(&run, cfg));
+    verdicts.extend(whip::assess(&run, cfg));
     let here = dir.display().to_string();
     for v in &mut verdicts {
         v.run.clone_from(&here);

@@ -53,7 +53,27 @@ pub struct RunFiles {
     pub feet: Vec<FootLength>,
     /// keypoints_filtered.csv: each heel's image y per frame.
     pub heel_y: BTreeMap<Side, BTreeMap<usize, f64>>,
+    /// keypoints_filtered.csv: the image (x, y) per frame of the keypoints in [`POINTS`]
+    /// that the run has.
+    pub points: BTreeMap<String, BTreeMap<usize, [f64; 2]>>,
+    /// bouts.csv: (first, last, +1 walking to the image right or -1 to the left).
+    pub bouts: Vec<(usize, usize, f64)>,
 }
+
+/// The keypoints the trunk, arm and foot items read (BlazePose's wrists under their `bp_` names).
+pub const POINTS: [&str; 11] = [
+    "left_shoulder",
+    "right_shoulder",
+    "mid_hip",
+    "left_heel",
+    "right_heel",
+    "left_toe",
+    "right_toe",
+    "left_hip",
+    "right_hip",
+    "bp_left_wrist",
+    "bp_right_wrist",
+];
 
 type Rows = (Vec<String>, Vec<Vec<String>>);
 
@@ -106,7 +126,32 @@ impl RunFiles {
             }
         }
         r.strides = strides(dir)?;
-        r.heel_y = heels(&dir.join("keypoints_filtered.csv"))?;
+        r.points = points(&dir.join("keypoints_filtered.csv"))?;
+        for sd in Side::BOTH {
+            if let Some(p) = r.points.get(&format!("{}_heel", sd.name())) {
+                r.heel_y
+                    .insert(sd, p.iter().map(|(&f, xy)| (f, xy[1])).collect());
+            }
+        }
+        if let Some((h, rows)) = read(&dir.join("bouts.csv"))? {
+            let f = "bouts.csv";
+            let (a, b, d) = (
+                col(&h, "first", f)?,
+                col(&h, "last", f)?,
+                col(&h, "direction", f)?,
+            );
+            r.bouts = rows
+                .iter()
+                .filter_map(|row| {
+                    let sign = match row[d].as_str() {
+                        "right" => 1.0,
+                        "left" => -1.0,
+                        _ => return None,
+                    };
+                    Some((num(&row[a]) as usize, num(&row[b]) as usize, sign))
+                })
+                .collect();
+        }
         if let Some((h, rows)) = read(&dir.join("cycles_all.csv"))? {
             let f = "cycles_all.csv";
             let [s, j, first, p, v] =
@@ -185,6 +230,21 @@ impl RunFiles {
         self.strides.iter().filter(move |s| s.side == side)
     }
 
+    /// +1 when the walker goes to the image right at `frame`, -1 to the left, `None` outside
+    /// the bouts.
+    pub fn direction(&self, frame: usize) -> Option<f64> {
+        self.bouts
+            .iter()
+            .find(|(a, b, _)| (*a..=*b).contains(&frame))
+            .map(|b| b.2)
+    }
+
+    /// Keypoint `name` at `frame`, when seen.
+    pub fn at(&self, name: &str, frame: usize) -> Option<[f64; 2]> {
+        let p = *self.points.get(name)?.get(&frame)?;
+        (p[0].is_finite() && p[1].is_finite()).then_some(p)
+    }
+
     /// A spatiotemporal row.
     pub fn param(&self, parameter: &str, side: &str) -> Option<&Param> {
         self.spatiotemporal
@@ -240,9 +300,10 @@ fn strides(dir: &Path) -> Result<Vec<Stride>, ChecklistError> {
         .collect())
 }
 
-/// Each heel's image y per frame from a keypoints CSV (DeepLabCut layout: rows
-/// `scorer`, `bodyparts`, `coords`, then one row per frame); empty when absent.
-fn heels(path: &Path) -> Result<BTreeMap<Side, BTreeMap<usize, f64>>, ChecklistError> {
+/// The [`POINTS`] of a keypoints CSV (DeepLabCut layout: rows `scorer`, `bodyparts`, `coords`,
+/// then one row per frame), per frame; empty when absent. Points at (0, 0) are motion capture's
+/// missing markers and are left out.
+fn points(path: &Path) -> Result<BTreeMap<String, BTreeMap<usize, [f64; 2]>>, ChecklistError> {
     let mut out = BTreeMap::new();
     if !path.exists() {
         return Ok(out);
@@ -257,16 +318,22 @@ fn heels(path: &Path) -> Result<BTreeMap<Side, BTreeMap<usize, f64>>, ChecklistE
     let (Some(parts), Some(coords)) = (rows.get(1), rows.get(2)) else {
         return Ok(out);
     };
-    for sd in Side::BOTH {
-        let name = format!("{}_heel", sd.name());
-        let Some(c) = (0..parts.len()).find(|&k| parts[k] == name && coords.get(k) == Some("y"))
-        else {
+    for name in POINTS {
+        let find =
+            |c: &str| (0..parts.len()).find(|&k| &parts[k] == name && coords.get(k) == Some(c));
+        let (Some(cx), Some(cy)) = (find("x"), find("y")) else {
             continue;
         };
-        let series = rows[3..]
+        let series: BTreeMap<usize, [f64; 2]> = rows[3..]
             .iter()
-            .filter_map(|row| Some((row.get(0)?.parse().ok()?, num(row.get(c)?))));
-        out.insert(sd, series.collect());
+            .filter_map(|row| {
+                let xy = [num(row.get(cx)?), num(row.get(cy)?)];
+                (xy != [0.0, 0.0]).then_some((row.get(0)?.parse().ok()?, xy))
+            })
+            .collect();
+        if !series.is_empty() {
+            out.insert(name.to_string(), series);
+        }
     }
     Ok(out)
 }

@@ -49,6 +49,23 @@ pub const KNEE_EXTENSION: Item = Item {
     amputation: "transtibial",
 };
 
+pub const FOOT_SLAP: Item = Item {
+    id: "foot_slap",
+    name: "Foot slap",
+    measure: "largest plantarflexion of the ankle in 0-15 % of the cycle (loading response: the foot dropping to the floor after heel strike)",
+    unit: "deg",
+    view: "side",
+    amputation: "both",
+};
+pub const TERMINAL_IMPACT: Item = Item {
+    id: "terminal_swing_impact",
+    name: "Terminal swing impact",
+    measure: "fastest knee extension in 80-100 % of the cycle (degrees per 1 % of the cycle), over the other side's; present on the faster side",
+    unit: "deg/%",
+    view: "side",
+    amputation: "transfemoral",
+};
+
 /// The symmetry items: each side's mean, present on the larger side when the symmetry index
 /// passes `checklist.symmetry_pct`.
 fn symmetry(run: &RunFiles, item: Item, parameter: &str, cfg: &ChecklistConfig) -> [Verdict; 2] {
@@ -131,9 +148,20 @@ fn knee(
     range: std::ops::RangeInclusive<usize>,
     largest: bool,
 ) -> Vec<Sample> {
+    extreme(run, side, "knee", range, largest)
+}
+
+/// Per accepted cycle of `side`, `joint`'s extreme over `range` (% of the cycle).
+fn extreme(
+    run: &RunFiles,
+    side: Side,
+    joint: &str,
+    range: std::ops::RangeInclusive<usize>,
+    largest: bool,
+) -> Vec<Sample> {
     run.sagittal
         .iter()
-        .filter(|((s, joint, _), _)| *s == side && joint == "knee")
+        .filter(|((s, j, _), _)| *s == side && j == joint)
         .filter_map(|((_, _, first), curve)| {
             let stride = run.strides_of(side).find(|s| s.first == *first)?;
             let pick = range.clone().filter(|&p| curve[p].is_finite());
@@ -154,7 +182,15 @@ fn knee(
 
 /// The five side-view items for both sides.
 pub fn assess(run: &RunFiles, cfg: &ChecklistConfig, norm: Option<&Normative>) -> Vec<Verdict> {
-    let all = [STEP_TIME, STANCE, STEP_LENGTH, KNEE_FLEXION, KNEE_EXTENSION];
+    let all = [
+        STEP_TIME,
+        STANCE,
+        STEP_LENGTH,
+        KNEE_FLEXION,
+        KNEE_EXTENSION,
+        FOOT_SLAP,
+        TERMINAL_IMPACT,
+    ];
     if run.view != "sagittal" {
         return Side::BOTH
             .iter()
@@ -207,5 +243,90 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig, norm: Option<&Normative>) -
             if curve.is_some() { few } else { no_norm },
         ));
     }
+    out.extend(foot_slap(run, norm, k));
+    out.extend(terminal_impact(run, cfg));
     out
+}
+
+/// Foot slap: the ankle's most plantarflexed point in loading response against the normative
+/// ankle's mean - k SD there, less the MDC95 of the ankle's peak plantarflexion on video: the
+/// pose model's foot points move that peak by 7-11 deg between encodings of one walk, and the
+/// sample's healthy walker has one such cycle (-27 deg).
+fn foot_slap(run: &RunFiles, norm: Option<&Normative>, k: f64) -> [Verdict; 2] {
+    let curve = norm.and_then(|n| n.curve("ankle"));
+    let noise = gait_eval::reliability::angle_mdc("ankle", "peak extension").unwrap_or(0.0);
+    let limit = curve.map(|c| {
+        (0..=15)
+            .map(|p| c.mean[p] - k * c.sd[p])
+            .fold(f64::MAX, f64::min)
+            - noise
+    });
+    Side::BOTH.map(|side| {
+        let t = Threshold {
+            value: limit.unwrap_or(f64::NAN),
+            beyond: "below",
+            source: format!(
+                "the normative ankle, mean - {k} SD, its smallest in 0-15 %, less the MDC95 of the ankle's peak plantarflexion ({noise:.1} deg)"
+            ),
+        };
+        let why = if curve.is_some() {
+            "no accepted cycle of this side"
+        } else {
+            "no normative band (report.normative = \"none\")"
+        };
+        judge(FOOT_SLAP, side, &extreme(run, side, "ankle", 0..=15, false), t, "deg", why)
+    })
+}
+
+/// Per accepted cycle of `side`, the knee's fastest extension over 80-100 % (degrees per 1 %).
+fn extension_speed(run: &RunFiles, side: Side) -> Vec<Sample> {
+    run.sagittal
+        .iter()
+        .filter(|((s, j, _), _)| *s == side && j == "knee")
+        .filter_map(|((_, _, first), c)| {
+            let stride = run.strides_of(side).find(|s| s.first == *first)?;
+            let (p, v) = (81..=100)
+                .map(|p| (p, c[p - 1] - c[p]))
+                .filter(|(_, v)| v.is_finite())
+                .max_by(|a, b| a.1.total_cmp(&b.1))?;
+            Some(Sample {
+                value: v,
+                first: stride.first,
+                frame: stride.first + ((stride.last - stride.first) * p) / 100,
+            })
+        })
+        .collect()
+}
+
+/// Terminal swing impact: each side's fastest terminal knee extension over the other side's
+/// mean; one-sided, as a prosthetic knee swinging into its stop is.
+fn terminal_impact(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
+    let both = Side::BOTH.map(|s| extension_speed(run, s));
+    let mean = |v: &[Sample]| v.iter().map(|s| s.value).sum::<f64>() / v.len() as f64;
+    Side::BOTH.map(|side| {
+        let (own, other) = match side {
+            Side::Left => (&both[0], &both[1]),
+            Side::Right => (&both[1], &both[0]),
+        };
+        let base = mean(other);
+        if other.is_empty() || base <= 0.0 {
+            let why = "needs accepted cycles of both sides";
+            return Verdict::not_assessable(TERMINAL_IMPACT, side, why);
+        }
+        let t = Threshold {
+            value: cfg.impact_ratio,
+            beyond: "above",
+            source: "checklist.impact_ratio: no published value; above the healthy trial (0.87-1.15), the sample (0.78-1.28) and the Parkinson's walker, whose right knee, taking 30 % longer steps, extends 1.6x faster than the left (BENCHMARKS.md)".into(),
+        };
+        let ratios: Vec<Sample> = own
+            .iter()
+            .map(|s| Sample {
+                value: s.value / base,
+                ..*s
+            })
+            .collect();
+        let mut v = judge(TERMINAL_IMPACT, side, &ratios, t, "x", "no accepted cycle of this side");
+        v.threshold_unit = "x the other side's".into();
+        v
+    })
 }

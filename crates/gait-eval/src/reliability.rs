@@ -25,6 +25,16 @@ pub fn mdc(parameter: &str, unit: &str) -> Option<f64> {
         .reduce(f64::max)
 }
 
+/// MDC95 of a joint angle's measure (`ankle`, `peak extension`), the larger over the sides.
+pub fn angle_mdc(joint: &str, measure: &str) -> Option<f64> {
+    let rows = ["left", "right"].map(|s| format!("\"{s} {joint} {measure} (deg)\","));
+    MDC_CSV
+        .lines()
+        .filter(|line| rows.iter().any(|r| line.starts_with(r.as_str())))
+        .filter_map(|line| line.rsplit(',').next()?.parse::<f64>().ok())
+        .reduce(f64::max)
+}
+
 /// The cell of the report: the parameter's MDC95 and its symmetry index's, where known.
 pub fn cell(parameter: &str, unit: &str) -> String {
     let own = mdc(parameter, unit).map(|v| format!("{v:.2} {unit}"));
