@@ -126,10 +126,8 @@ mod tests {
             (left.status, right.status),
             (Status::Absent, Status::Present)
         );
-        assert!(
-            (right.value - 6.0).abs() < 1e-9 && right.frames == vec![50],
-            "{right:?}"
-        );
+        assert!((right.value - 6.0).abs() < 1e-9, "{right:?}");
+        assert!(right.frames.len() == 1 && (50..=60).contains(&right.frames[0]));
         // Inward (image left for the right foot): the same size, medial.
         let [_, right] = assess(&run(-6.0), &cfg);
         assert!(right.status == Status::Present && (right.value + 6.0).abs() < 1e-9);
