@@ -1,6 +1,6 @@
 //! The checklist as a section of report.html.
 
-use crate::{Checklist, Status};
+use crate::{Checklist, Side, Status, Verdict};
 
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -18,7 +18,7 @@ fn num(v: f64) -> String {
 }
 
 impl Checklist {
-    /// The report section: one row per item and side, present items first.
+    /// The report section: one row per item with both sides, present items first.
     pub fn html(&self) -> String {
         self.html_with(None)
     }
@@ -30,83 +30,50 @@ impl Checklist {
             Some(a) => format!("Amputation level: {a}; items listed for the other level only are marked"),
             None => "Amputation level not set (kinematics.amputation): the items of both levels are shown".into(),
         };
-        let side_name = |s: crate::Side| match self.prosthetic {
+        let side_name = |s: Side| match self.prosthetic {
             Some(p) if p == s => format!("{} (prosthetic)", s.name()),
             Some(_) => format!("{} (intact)", s.name()),
             None => s.name().to_string(),
         };
-        let mut rows: Vec<(usize, &crate::Verdict)> = self.verdicts.iter().enumerate().collect();
-        let rank = |s: Status| match s {
-            Status::Present => 0,
-            Status::Absent => 1,
-            Status::NotAssessable => 2,
-        };
-        rows.sort_by_key(|(_, v)| rank(v.status));
         let from_head = if sources.is_some() {
             "<th>From</th>"
         } else {
             ""
         };
         let mut out = format!(
-            "<h2 id=\"checklist\">Amputee gait-deviation checklist</h2><p>Each item of the observational checklists (Berger 1992; Northwestern University Prosthetic-Orthotic Center) judged by a measure against a threshold with its source, per side. {}. This is a measurement, not a diagnosis. Also in checklist.csv.</p><table><thead><tr><th>Item</th><th>Side</th><th>Verdict</th><th>Value ± SD</th><th>Threshold</th><th>Measure and source</th><th>Cycles (first frames)</th>{from_head}</tr></thead><tbody>",
-            escape(&level)
+            "<h2 id=\"checklist\">Amputee gait-deviation checklist</h2><p>Each item of the observational checklists (Berger 1992; Northwestern University Prosthetic-Orthotic Center) judged by a measure against a threshold with its source, per side. {}. This is a measurement, not a diagnosis. Also in checklist.csv.</p><table><thead><tr><th>Item</th><th>{}</th><th>{}</th><th>Threshold</th><th>Measure and source</th><th>Cycles (first frames)</th>{from_head}</tr></thead><tbody>",
+            escape(&level),
+            escape(&side_name(Side::Left)),
+            escape(&side_name(Side::Right)),
         );
-        // Items that cannot be judged here are listed by reason under the table, not as rows.
+        // Items that cannot be judged on either side are listed by reason under the table.
         let mut unjudged: Vec<(String, Vec<String>)> = Vec::new();
-        for (i, v) in rows {
-            if v.status == Status::NotAssessable {
-                let name = format!("{} ({})", v.item.name, v.side.name());
-                match unjudged.iter_mut().find(|(r, _)| *r == v.reason) {
-                    Some((_, names)) => names.push(name),
-                    None => unjudged.push((v.reason.clone(), vec![name])),
+        let mut rows: Vec<(bool, String)> = Vec::new();
+        for id in self.item_ids() {
+            let of = |side| {
+                self.verdicts
+                    .iter()
+                    .enumerate()
+                    .find(|(_, v)| v.item.id == id && v.side == side)
+            };
+            let pair: Vec<(usize, &Verdict)> = Side::BOTH.iter().filter_map(|&s| of(s)).collect();
+            if pair.iter().all(|(_, v)| v.status == Status::NotAssessable) {
+                for (_, v) in &pair {
+                    let name = format!("{} ({})", v.item.name, v.side.name());
+                    match unjudged.iter_mut().find(|(r, _)| *r == v.reason) {
+                        Some((_, names)) => names.push(name),
+                        None => unjudged.push((v.reason.clone(), vec![name])),
+                    }
                 }
                 continue;
             }
-            let other_level = self
-                .amputation
-                .as_deref()
-                .is_some_and(|a| v.item.amputation != "both" && v.item.amputation != a);
-            let verdict = match v.status {
-                Status::Present => "<b>present</b>".to_string(),
-                Status::Absent => "absent".into(),
-                Status::NotAssessable => format!("not assessable: {}", escape(&v.reason)),
-            };
-            let value = match (num(v.value), num(v.spread)) {
-                (m, _) if m.is_empty() => String::new(),
-                (m, s) if s.is_empty() => format!("{m} {}", v.unit),
-                (m, s) => format!("{m} ± {s} {}", v.unit),
-            };
-            let threshold = if v.threshold.is_finite() {
-                format!("{} {} {}", v.beyond, num(v.threshold), v.threshold_unit)
-            } else {
-                String::new()
-            };
-            let mut cycles = v
-                .cycles
-                .iter()
-                .map(usize::to_string)
-                .collect::<Vec<_>>()
-                .join(", ");
-            if let (Status::Present, Some(f)) = (v.status, v.frames.first()) {
-                // The page of `gait review` opens where the deviation shows most in the first
-                // cycle that has it.
-                cycles.push_str(&format!(
-                    "<br><code>gait review {} --frame {f}</code>",
-                    escape(&v.run)
-                ));
-            }
-            let from = sources
-                .and_then(|s| s.get(i))
-                .map_or(String::new(), |s| format!("<td>{}</td>", escape(s)));
-            out.push_str(&format!(
-                "<tr><td>{}{}</td><td>{}</td><td>{verdict}</td><td>{value}</td><td>{threshold}</td><td>{}{}</td><td>{}</td>{from}</tr>",
-                escape(v.item.name),
-                if other_level { format!(" ({} only)", v.item.amputation) } else { String::new() },
-                side_name(v.side),
-                escape(v.item.measure),
-                if v.source.is_empty() { String::new() } else { format!("; threshold: {}", escape(&v.source)) },
-                cycles
-            ));
+            let present = pair.iter().any(|(_, v)| v.status == Status::Present);
+            rows.push((present, self.row(&pair, sources)));
+        }
+        // Present items first, each group in the checklist's order.
+        rows.sort_by_key(|(present, _)| !present);
+        for (_, row) in rows {
+            out.push_str(&row);
         }
         out.push_str("</tbody></table>");
         if !unjudged.is_empty() {
@@ -121,5 +88,106 @@ impl Checklist {
             out.push_str("</ul>");
         }
         out
+    }
+
+    /// The items' ids in the order they first appear.
+    fn item_ids(&self) -> Vec<&'static str> {
+        let mut ids: Vec<&'static str> = Vec::new();
+        for v in &self.verdicts {
+            if !ids.contains(&v.item.id) {
+                ids.push(v.item.id);
+            }
+        }
+        ids
+    }
+
+    /// One item's row from its verdicts of each side (with their index in `verdicts`).
+    fn row(&self, pair: &[(usize, &Verdict)], sources: Option<&[String]>) -> String {
+        let side_cell = |side: Side| {
+            let Some((_, v)) = pair.iter().find(|(_, v)| v.side == side) else {
+                return "<td></td>".to_string();
+            };
+            let verdict = match v.status {
+                Status::Present => "<b>present</b>".to_string(),
+                Status::Absent => "absent".into(),
+                Status::NotAssessable => format!("not assessable: {}", escape(&v.reason)),
+            };
+            let value = match (num(v.value), num(v.spread)) {
+                (m, _) if m.is_empty() => String::new(),
+                (m, s) if s.is_empty() => format!("<br>{m} {}", v.unit),
+                (m, s) => format!("<br>{m} ± {s} {}", v.unit),
+            };
+            format!("<td>{verdict}{value}</td>")
+        };
+        // The threshold and its source from the present side, else the first judged one.
+        let (_, lead) = pair
+            .iter()
+            .find(|(_, v)| v.status == Status::Present)
+            .or_else(|| pair.iter().find(|(_, v)| v.status != Status::NotAssessable))
+            .copied()
+            .unwrap_or(pair[0]);
+        let threshold = if lead.threshold.is_finite() {
+            format!(
+                "{} {} {}",
+                lead.beyond,
+                num(lead.threshold),
+                lead.threshold_unit
+            )
+        } else {
+            String::new()
+        };
+        let other_level = self
+            .amputation
+            .as_deref()
+            .is_some_and(|a| lead.item.amputation != "both" && lead.item.amputation != a);
+        let cycles: Vec<String> = pair
+            .iter()
+            .filter(|(_, v)| !v.cycles.is_empty())
+            .map(|(_, v)| {
+                let mut c = format!(
+                    "{}: {}",
+                    v.side.name(),
+                    v.cycles
+                        .iter()
+                        .map(usize::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+                if let (Status::Present, Some(f)) = (v.status, v.frames.first()) {
+                    // The page of `gait review` opens where the deviation shows most in the
+                    // first cycle that has it.
+                    c.push_str(&format!(
+                        "<br><code>gait review {} --frame {f}</code>",
+                        escape(&v.run)
+                    ));
+                }
+                c
+            })
+            .collect();
+        let from = sources.map_or(String::new(), |s| {
+            let names: Vec<String> = pair
+                .iter()
+                .filter_map(|(i, v)| Some(format!("{}: {}", v.side.name(), s.get(*i)?)))
+                .collect();
+            format!("<td>{}</td>", escape(&names.join("; ")))
+        });
+        format!(
+            "<tr><td>{}{}</td>{}{}<td>{threshold}</td><td>{}{}</td><td>{}</td>{from}</tr>",
+            escape(lead.item.name),
+            if other_level {
+                format!(" ({} only)", lead.item.amputation)
+            } else {
+                String::new()
+            },
+            side_cell(Side::Left),
+            side_cell(Side::Right),
+            escape(lead.item.measure),
+            if lead.source.is_empty() {
+                String::new()
+            } else {
+                format!("; threshold: {}", escape(&lead.source))
+            },
+            cycles.join("<br>"),
+        )
     }
 }

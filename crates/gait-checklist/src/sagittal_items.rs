@@ -19,7 +19,7 @@ pub const STEP_TIME: Item = Item {
 pub const STANCE: Item = Item {
     id: "uneven_stance_time",
     name: "Uneven stance time",
-    measure: "stance (% of the stride); judged by the temporal symmetry ratio (swing / stance of the side) / (swing / stance of the other side): present on the side with the shorter stance when the ratio passes the threshold",
+    measure: "stance (% of the stride); judged by (swing / stance) over the other side's, present on the side with the shorter stance",
     unit: "%",
     view: "side",
     amputation: "both",
@@ -52,7 +52,7 @@ pub const KNEE_EXTENSION: Item = Item {
 pub const FOOT_SLAP: Item = Item {
     id: "foot_slap",
     name: "Foot slap",
-    measure: "largest plantarflexion of the ankle in 0-15 % of the cycle (loading response: the foot dropping to the floor after heel strike)",
+    measure: "largest ankle plantarflexion in 0-15 % of the cycle (loading response)",
     unit: "deg",
     view: "side",
     amputation: "both",
@@ -60,7 +60,7 @@ pub const FOOT_SLAP: Item = Item {
 pub const TERMINAL_IMPACT: Item = Item {
     id: "terminal_swing_impact",
     name: "Terminal swing impact",
-    measure: "fastest knee extension in 80-100 % of the cycle (degrees per 1 % of the cycle), over the other side's; present on the faster side",
+    measure: "fastest knee extension in 80-100 % of the cycle (deg per 1 %), over the other side's",
     unit: "deg/%",
     view: "side",
     amputation: "transfemoral",
@@ -134,7 +134,7 @@ fn stance_ratio(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
         v.threshold = cfg.temporal_ratio;
         v.threshold_unit = "swing:stance ratio".into();
         v.source = format!(
-            "checklist.temporal_ratio (Patterson et al. 2008: 0.9-1.1 in 24 healthy adults), on the swing:stance ratio over the other side's (here {ratio:.3})"
+            "checklist.temporal_ratio (Patterson et al. 2008: 0.9-1.1 healthy), on the swing:stance ratio (here {ratio:.3})"
         );
         v.reason.clear();
         v
@@ -266,7 +266,7 @@ fn foot_slap(run: &RunFiles, norm: Option<&Normative>, k: f64) -> [Verdict; 2] {
             value: limit.unwrap_or(f64::NAN),
             beyond: "below",
             source: format!(
-                "the normative ankle, mean - {k} SD, its smallest in 0-15 %, less the MDC95 of the ankle's peak plantarflexion ({noise:.1} deg)"
+                "the normative ankle, mean - {k} SD in 0-15 %, less its video MDC95 ({noise:.1} deg)"
             ),
         };
         let why = if curve.is_some() {
@@ -316,7 +316,9 @@ fn terminal_impact(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
         let t = Threshold {
             value: cfg.impact_ratio,
             beyond: "above",
-            source: "checklist.impact_ratio: no published value; above the healthy trial (0.87-1.15), the sample (0.78-1.28) and the Parkinson's walker, whose right knee, taking 30 % longer steps, extends 1.6x faster than the left (BENCHMARKS.md)".into(),
+            source:
+                "checklist.impact_ratio: no published value (healthy walks 0.8-1.3, BENCHMARKS.md)"
+                    .into(),
         };
         let ratios: Vec<Sample> = own
             .iter()
@@ -325,7 +327,14 @@ fn terminal_impact(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
                 ..*s
             })
             .collect();
-        let mut v = judge(TERMINAL_IMPACT, side, &ratios, t, "x", "no accepted cycle of this side");
+        let mut v = judge(
+            TERMINAL_IMPACT,
+            side,
+            &ratios,
+            t,
+            "x",
+            "no accepted cycle of this side",
+        );
         v.threshold_unit = "x the other side's".into();
         v
     })

@@ -9,7 +9,7 @@ use crate::{ChecklistConfig, Side};
 pub const TRUNK_FLEXION: Item = Item {
     id: "excessive_trunk_flexion",
     name: "Excessive trunk flexion",
-    measure: "forward lean of the trunk (mid-hip to mid-shoulder) from the vertical, toward the walking direction, mean over each accepted stride of the side (a lordosis is not seen by keypoints)",
+    measure: "forward lean of the trunk (mid-hip to mid-shoulder) from the vertical, mean over the side's strides (a lordosis is not seen by keypoints)",
     unit: "deg",
     view: "side",
     amputation: "both",
@@ -17,7 +17,7 @@ pub const TRUNK_FLEXION: Item = Item {
 pub const ARM_SWING: Item = Item {
     id: "uneven_arm_swing",
     name: "Uneven arm swing",
-    measure: "the arm's swing (range over the stride of the shoulder-to-wrist line's angle from the vertical), mean over the side's accepted strides; present on the side that swings less when the symmetry index 100 (a - b) / mean(a, b) passes the threshold",
+    measure: "the arm's swing (range of the shoulder-wrist angle over the stride); present on the side that swings less when the symmetry index passes the threshold",
     unit: "deg",
     view: "side",
     amputation: "both",
@@ -116,7 +116,7 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig) -> Vec<Verdict> {
             let t = Threshold {
                 value: cfg.trunk_flexion_deg,
                 beyond: "above",
-                source: "checklist.trunk_flexion_deg: no published 2-D value; healthy walkers lean a few degrees forward (BlazePose's shoulders and hips put the bundled sample's healthy walker at -8 deg, leaning back)".into(),
+                source: "checklist.trunk_flexion_deg: no published 2-D value".into(),
             };
             let none = "needs both shoulders and the mid-hip over most of an accepted stride";
             judge(TRUNK_FLEXION, side, &trunk(run, side), t, "deg", none)
@@ -160,7 +160,7 @@ fn arm_swing(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
         v.threshold = cfg.arm_swing_pct;
         v.threshold_unit = "%".into();
         v.source = format!(
-            "checklist.arm_swing_pct, on the symmetry index (here {si:.1} %): no published 2-D value; a side view half hides the far arm"
+            "checklist.arm_swing_pct, on the symmetry index (here {si:.1} %): no published 2-D value"
         );
         v.reason.clear();
         v

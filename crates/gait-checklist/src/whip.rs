@@ -10,7 +10,7 @@ use crate::{ChecklistConfig, Side};
 pub const WHIP: Item = Item {
     id: "medial_lateral_whip",
     name: "Medial or lateral whip at toe-off",
-    measure: "the heel's sideways shift against the toe (heel x - toe x, seen from behind) from its median over 15-30 % of the stride (foot flat) to its extreme between 15 % of the stride before toe-off and 5 % after, in % of the leg length; + lateral, - medial; present when its size passes the threshold",
+    measure: "the heel's sideways shift against the toe from foot flat (15-30 % of the stride) to its extreme around toe-off (-15 % to +5 %), in % of the leg; + lateral, - medial",
     unit: "% leg",
     view: "back",
     amputation: "both",
@@ -61,7 +61,7 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
         let t = Threshold {
             value: 100.0 * cfg.whip_leg,
             beyond: "above",
-            source: "checklist.whip_leg, on the size of the mean shift (about 4 cm over a 0.84 m leg): no published value".into(),
+            source: "checklist.whip_leg, on the size (about 4 cm): no published value".into(),
         };
         let abs: Vec<Sample> = samples
             .iter()
