@@ -28,6 +28,18 @@ impl Threshold {
     }
 }
 
+/// Mean and sample SD (NaN for one value).
+pub fn mean_sd(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let sd = if values.len() > 1 {
+        (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+    } else {
+        f64::NAN
+    };
+    (mean, sd)
+}
+
 /// Present when the mean over the samples passes the threshold; the cycles listed are those
 /// whose own value passes it. No sample: not assessable, with `none` as the reason.
 pub fn judge(
@@ -46,13 +58,7 @@ pub fn judge(
     if values.is_empty() || !t.value.is_finite() {
         return Verdict::not_assessable(item, side, none);
     }
-    let n = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / n;
-    let spread = if values.len() > 1 {
-        (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-    } else {
-        f64::NAN
-    };
+    let (mean, spread) = mean_sd(&values);
     let hits: Vec<&Sample> = samples.iter().filter(|s| t.passed(s.value)).collect();
     Verdict {
         item,

@@ -4,7 +4,7 @@
 use gait_eval::normative::Normative;
 
 use crate::judge::{Sample, Threshold, judge};
-use crate::run_files::RunFiles;
+use crate::run_files::{Param, RunFiles};
 use crate::verdict::{Item, Status, Verdict};
 use crate::{ChecklistConfig, Side};
 
@@ -83,22 +83,33 @@ fn symmetry(run: &RunFiles, item: Item, parameter: &str, cfg: &ChecklistConfig) 
             Side::Left => (l, si > 0.0),
             Side::Right => (r, si < 0.0),
         };
-        let mut v = Verdict::not_assessable(item, side, "");
-        v.status = if larger && si.abs() > cfg.symmetry_pct {
-            Status::Present
-        } else {
-            Status::Absent
-        };
-        v.value = own.mean;
-        v.spread = own.sd;
-        v.n = own.n;
-        v.unit = own.unit.clone();
-        v.threshold = cfg.symmetry_pct;
-        v.threshold_unit = "%".into();
-        v.source = format!("checklist.symmetry_pct, on the symmetry index (here {si:.1} %)");
-        v.reason.clear();
-        v
+        let source = format!("checklist.symmetry_pct, on the symmetry index (here {si:.1} %)");
+        let present = larger && si.abs() > cfg.symmetry_pct;
+        of_param(item, side, own, present, (cfg.symmetry_pct, "%"), source)
     })
+}
+
+/// A side's verdict on a spatiotemporal row judged against `threshold` (value, unit).
+fn of_param(
+    item: Item,
+    side: Side,
+    own: &Param,
+    present: bool,
+    threshold: (f64, &str),
+    source: String,
+) -> Verdict {
+    let mut v = Verdict::not_assessable(item, side, "");
+    v.status = if present {
+        Status::Present
+    } else {
+        Status::Absent
+    };
+    (v.value, v.spread, v.n) = (own.mean, own.sd, own.n);
+    v.unit = own.unit.clone();
+    (v.threshold, v.threshold_unit) = (threshold.0, threshold.1.into());
+    v.source = source;
+    v.reason.clear();
+    v
 }
 
 /// Uneven stance time: Patterson et al.'s temporal symmetry ratio, the side's swing:stance over
@@ -121,23 +132,12 @@ fn stance_ratio(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
             Side::Left => (l, wl / wr),
             Side::Right => (r, wr / wl),
         };
-        let mut v = Verdict::not_assessable(STANCE, side, "");
-        v.status = if ratio > cfg.temporal_ratio {
-            Status::Present
-        } else {
-            Status::Absent
-        };
-        v.value = own.mean;
-        v.spread = own.sd;
-        v.n = own.n;
-        v.unit = own.unit.clone();
-        v.threshold = cfg.temporal_ratio;
-        v.threshold_unit = "swing:stance ratio".into();
-        v.source = format!(
+        let source = format!(
             "checklist.temporal_ratio (Patterson et al. 2008: 0.9-1.1 healthy), on the swing:stance ratio (here {ratio:.3})"
         );
-        v.reason.clear();
-        v
+        let present = ratio > cfg.temporal_ratio;
+        let threshold = (cfg.temporal_ratio, "swing:stance ratio");
+        of_param(STANCE, side, own, present, threshold, source)
     })
 }
 

@@ -1,7 +1,7 @@
 //! The upper body from the side: trunk flexion and arm swing, from the shoulders, the mid-hip
 //! and the wrists of keypoints_filtered.csv over each accepted stride.
 
-use crate::judge::{Sample, Threshold, judge};
+use crate::judge::{Sample, Threshold, judge, mean_sd};
 use crate::run_files::{RunFiles, Stride};
 use crate::verdict::{Item, Status, Verdict};
 use crate::{ChecklistConfig, Side};
@@ -136,11 +136,7 @@ fn arm_swing(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
         return Side::BOTH.map(|s| Verdict::not_assessable(ARM_SWING, s, why));
     }
     let stats = |v: &[f64]| {
-        let n = v.len() as f64;
-        let m = v.iter().sum::<f64>() / n;
-        let sd = (v.len() > 1)
-            .then(|| (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt())
-            .unwrap_or(f64::NAN);
+        let (m, sd) = mean_sd(v);
         (m, sd, v.len())
     };
     let (l, r) = (stats(&both[0]), stats(&both[1]));

@@ -34,7 +34,7 @@ fn whips(run: &RunFiles, side: Side) -> Vec<Sample> {
             let at = |share: f64| (s.first as f64 + share * len).round() as usize;
             let to = s.toe_off?;
             let mut flat: Vec<f64> = (at(0.15)..=at(0.3)).filter_map(shift).collect();
-            if flat.is_empty() || !(s.leg_px > 0.0) {
+            if flat.is_empty() || s.leg_px.is_nan() || s.leg_px <= 0.0 {
                 return None;
             }
             flat.sort_by(f64::total_cmp);
