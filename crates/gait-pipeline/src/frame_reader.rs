@@ -92,13 +92,14 @@ impl FrameReader {
                 img
             }
             Source::Video(decoder) => {
-                let mut buf = vec![0u8; self.info.width as usize * self.info.height as usize * 3];
-                match decoder.read_frame(&mut buf)? {
+                let len = self.info.width as usize * self.info.height as usize * 3;
+                let mut buf = Vec::with_capacity(len);
+                match decoder.read_frame(&mut buf, len)? {
                     0 => {
                         decoder.finish(index)?;
                         return Ok(None);
                     }
-                    n if n < buf.len() => {
+                    n if n < len => {
                         return Err(PipelineError::input(
                             &self.info.path,
                             format!("frame {index} is truncated; the video is damaged"),
