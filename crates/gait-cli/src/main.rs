@@ -4,6 +4,7 @@ mod commands;
 mod error;
 mod hub;
 mod interrupt;
+mod malloc_tuning;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -54,6 +55,7 @@ enum Command {
 
 fn main() -> ExitCode {
     gait_pipeline::timings::mark_process_start();
+    malloc_tuning::keep_frame_buffers();
     let cli = Cli::parse();
     let models_dir = commands::models_dir(cli.models_dir);
     let result: Result<(), CliError> = match cli.command {
