@@ -15,6 +15,10 @@ pub struct ReportConfig {
     /// "skeleton" (the video with the skeleton) or "side_by_side" (original |
     /// regenerated | keypoints, for zero-shot runs).
     pub overlay_layout: OverlayLayout,
+    /// overlay.mp4's largest height in pixels (inputs higher are scaled down). 540 is the size
+    /// the report plays it at (960 px wide for 16:9) and costs 2 CPU s less than 720 on the
+    /// sample (BENCHMARKS.md); 720 or 1080 for a sharper full-screen picture.
+    pub overlay_height: u32,
     /// Print report.pdf with headless Chromium; absent = when one is on the PATH.
     pub pdf: Option<bool>,
 }
@@ -33,6 +37,7 @@ impl Default for ReportConfig {
             normative: crate::normative::builtin_names()[0].to_string(),
             overlay: true,
             overlay_layout: OverlayLayout::Skeleton,
+            overlay_height: 540,
             pdf: None,
         }
     }

@@ -220,6 +220,12 @@ impl PipelineConfig {
         self.checklist
             .validate()
             .map_err(|e| invalid("checklist", &e.to_string()))?;
+        if self.report.overlay_height < 64 {
+            return Err(invalid(
+                "report",
+                "overlay_height must be at least 64 (pixels; 540 by default)",
+            ));
+        }
         // A bad normative file is found before any frame is processed.
         self.report.load_normative().map_err(|e| {
             invalid(

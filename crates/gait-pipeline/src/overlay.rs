@@ -78,6 +78,7 @@ pub(crate) fn write_overlay(
     };
     let opts = OverlayOptions {
         layout,
+        max_height: Some(config.report.overlay_height),
         ..Default::default()
     };
     // A skeleton overlay shown smaller than the input is decoded at that size.
