@@ -314,6 +314,49 @@ fn a_run_without_its_video_shows_the_plots_and_says_why() {
     assert_eq!(server.get("/api/frame/50").0, 200);
 }
 
+/// A `gait kin` folder opens as `gait review DIR` (the command its checklist prints), with the
+/// keypoints, frame rate and settings of kin.json: the same events as the folder's events.csv,
+/// and corrections saved in the folder.
+#[test]
+fn a_gait_kin_folder_opens_with_its_own_settings() {
+    let work = tempfile::tempdir().unwrap();
+    let keypoints =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/sample-subject/keypoints.csv");
+    let out = work.path().join("kin");
+    run_ok(
+        gait()
+            .args(["kin", "--fps", "30", "--keypoints"])
+            .arg(&keypoints)
+            .arg("--out")
+            .arg(&out)
+            .args(["--set", "kinematics.prosthetic_side=\"right\""])
+            .args(["--set", "report.pdf=false"]),
+    );
+    let manifest = read_json(&out.join("kin.json"));
+    assert_eq!(manifest["fps"], serde_json::json!(30.0));
+    assert_eq!(
+        manifest["config"]["kinematics"]["prosthetic_side"],
+        serde_json::json!("right")
+    );
+    let events = std::fs::read_to_string(out.join("events.csv")).unwrap();
+    let server = Server::start(&[out.as_os_str()]);
+    let (status, body) = server.get("/api/analysis");
+    assert_eq!(status, 200, "{body}");
+    let data: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(
+        data["events"].as_array().map(Vec::len),
+        Some(events.lines().count() - 1),
+        "{body}"
+    );
+    let (status, body) = server.request(
+        "POST",
+        &format!("/api/corrections?token={}", server.token()),
+        r#"{"event":[{"side":"right","kind":"heel_strike","frame":60,"action":"add"}]}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    assert!(out.join("corrections.toml").is_file());
+}
+
 #[test]
 fn keypoints_and_a_video_without_a_run_folder() {
     let work = tempfile::tempdir().unwrap();

@@ -128,6 +128,9 @@ impl ReviewSource {
             ));
         }
         let manifest_path = dir.join("run.json");
+        if !manifest_path.exists() && dir.join("kin.json").exists() {
+            return Self::from_kin_dir(dir, video);
+        }
         let manifest = read_json(&manifest_path)?;
         let config = PipelineConfig::load(Some(&manifest_path), &[])?;
         let fps = manifest
@@ -182,6 +185,27 @@ impl ReviewSource {
     /// A keypoints CSV (DeepLabCut layout) with its video; the analysis settings come from
     /// `config` (else the built-in default) and the corrections file is `corrections`
     /// (else corrections.toml beside the keypoints).
+    /// A `gait kin` folder: kin.json names the keypoints and their frame rate and holds the
+    /// settings the folder was made with; corrections are saved beside them in the folder.
+    fn from_kin_dir(dir: &Path, video: Option<&Path>) -> Result<Self, ReviewError> {
+        let path = dir.join("kin.json");
+        let manifest = read_json(&path)?;
+        let keypoints = manifest
+            .get("keypoints")
+            .and_then(Value::as_str)
+            .map(PathBuf::from)
+            .ok_or_else(|| ReviewError::run(&path, "names no keypoints file"))?;
+        let fps = manifest
+            .get("fps")
+            .and_then(Value::as_f64)
+            .ok_or_else(|| ReviewError::run(&path, "has no fps"))?;
+        let corrections = dir.join("corrections.toml");
+        let mut src =
+            Self::from_keypoints(&keypoints, video, fps, Some(&path), Some(&corrections))?;
+        src.title = dir.display().to_string();
+        Ok(src)
+    }
+
     pub fn from_keypoints(
         keypoints: &Path,
         video: Option<&Path>,

@@ -66,6 +66,7 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
         ))
     })?;
     let (result, outputs) = gait_pipeline::kin_and_write(&seq, &config, &args.out)?;
+    write_manifest(&args, fps, &config)?;
     for w in &result.warnings {
         eprintln!("warning: {w}");
     }
@@ -80,4 +81,22 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
         args.out.display()
     );
     Ok(())
+}
+
+/// kin.json: what `gait review OUT` needs to open the folder as the run it is (the keypoints
+/// file, the frame rate and the resolved config with its `--set`s), so the checklist's
+/// `gait review OUT --frame N` works for `gait kin` folders as for `gait run` ones.
+fn write_manifest(args: &Args, fps: f64, config: &PipelineConfig) -> Result<(), CliError> {
+    let keypoints = std::fs::canonicalize(&args.keypoints).unwrap_or(args.keypoints.clone());
+    let manifest = serde_json::json!({
+        "tool": format!("gait kin {}", env!("CARGO_PKG_VERSION")),
+        "keypoints": keypoints,
+        "fps": fps,
+        "individual": args.individual,
+        "config": config,
+    });
+    let path = args.out.join("kin.json");
+    let text = serde_json::to_string_pretty(&manifest).map_err(|e| CliError::new(e.to_string()))?;
+    std::fs::write(&path, text)
+        .map_err(|e| CliError::new(format!("writing {}: {e}", path.display())))
 }
