@@ -122,7 +122,8 @@ def test_kin_equals_the_kin_command(gait, tmp_path, keypoints_csv, fps, read):
             assert table is None, name
             continue
         assert_frames_equal(table, pd.read_csv(run.dir / f"{name}.csv"), name)
-    assert compare_run_dirs(tmp_path / "cli", run.dir) == []
+    # kin.json names the command's keypoints file for `gait review`; gait.kin takes a table.
+    assert compare_run_dirs(tmp_path / "cli", run.dir, skip=("kin.json",)) == []
     assert len(run.events) > 4
     if frontal:
         assert set(run.frontal_cycles["side"]) == {"left", "right"}
