@@ -26,6 +26,12 @@ def _running(job):
     return [t for t, s in _tasks(job) if s == "RUNNING"]
 
 
+def _restarts(job):
+    """Requeues so far, summed over the job array's tasks (`scontrol show job`'s Restarts=)."""
+    shown = _scontrol("show", "job", job).stdout
+    return sum(int(w.split("=")[1]) for w in shown.split() if w.startswith("Restarts="))
+
+
 def _nudge(job):
     """A requeued task waits ~2 minutes (Slurm's own delay) before it may start again; in the
     quick mode it is let start now. Nothing else about the requeue changes."""
@@ -58,6 +64,7 @@ def run(gait, ref, work, events, quick, log):
             batch, timeout=600, every=0.2,
         )
         row = {"event": kind, "tasks_running": _running(job)}
+        restarts_before = _restarts(job)
         if not hit:
             row["ok"] = False
             row["why"] = "no task was running"
@@ -71,11 +78,19 @@ def run(gait, ref, work, events, quick, log):
         else:
             for t in row["tasks_running"]:
                 subprocess.run(["scancel", "--signal=USR1", "--batch", t], check=False)
-        # Requeued: the tasks that ran are pending again (Restarts counts it).
-        runs.wait_for(lambda: not _running(job) or any(s == "PENDING" for _, s in _tasks(job)), timeout=60, every=0.2)
-        time.sleep(2)
-        shown = _scontrol("show", "job", job).stdout
-        row["restarts"] = max((int(w.split("=")[1]) for w in shown.split() if w.startswith("Restarts=")), default=0)
+        # Requeued: Restarts grows and the tasks that ran are pending again. Waited for as such:
+        # the array's tasks that have not started yet are pending too, so "a task is pending"
+        # said nothing, and on a slow machine a task's own requeue (after its frame in flight)
+        # came after the 2 s this once waited. Then the old instances' clean-up on the node:
+        # a requeued task let start at once (the nudge below) failed there in 0 s.
+        ran = set(row["tasks_running"])
+        runs.wait_for(
+            lambda: _restarts(job) > restarts_before
+            and all(s == "PENDING" for t, s in _tasks(job) if t in ran),
+            timeout=120, every=0.5,
+        )
+        time.sleep(3)
+        row["restarts"] = _restarts(job) - restarts_before
         if quick:
             _nudge(job)
         row["ok"] = row["restarts"] > 0
