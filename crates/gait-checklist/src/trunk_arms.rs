@@ -38,21 +38,16 @@ fn arm_angle(shoulder: [f64; 2], wrist: [f64; 2], dir: f64) -> f64 {
         .to_degrees()
 }
 
-/// The midpoint of the shoulders at `frame`.
-fn mid_shoulder(run: &RunFiles, frame: usize) -> Option<[f64; 2]> {
-    let (l, r) = (
-        run.at("left_shoulder", frame)?,
-        run.at("right_shoulder", frame)?,
-    );
+/// The midpoint of the keypoints `a` and `b` at `frame`, when both are seen.
+fn midpoint(run: &RunFiles, a: &str, b: &str, frame: usize) -> Option<[f64; 2]> {
+    let (l, r) = (run.at(a, frame)?, run.at(b, frame)?);
     Some([(l[0] + r[0]) / 2.0, (l[1] + r[1]) / 2.0])
 }
 
 /// The mid-hip at `frame`: the model's own point, else the hips' midpoint (motion capture).
 fn mid_hip(run: &RunFiles, frame: usize) -> Option<[f64; 2]> {
-    run.at("mid_hip", frame).or_else(|| {
-        let (l, r) = (run.at("left_hip", frame)?, run.at("right_hip", frame)?);
-        Some([(l[0] + r[0]) / 2.0, (l[1] + r[1]) / 2.0])
-    })
+    run.at("mid_hip", frame)
+        .or_else(|| midpoint(run, "left_hip", "right_hip", frame))
 }
 
 /// Per frame of the stride with a known direction, `f(frame, direction)`.
@@ -68,7 +63,11 @@ fn trunk(run: &RunFiles, side: Side) -> Vec<Sample> {
     run.strides_of(side)
         .filter_map(|s| {
             let v = over(s, run, |i, d| {
-                Some(lean(mid_hip(run, i)?, mid_shoulder(run, i)?, d))
+                Some(lean(
+                    mid_hip(run, i)?,
+                    midpoint(run, "left_shoulder", "right_shoulder", i)?,
+                    d,
+                ))
             });
             // Most of the stride, so that a stride seen half is not read as the trunk's.
             (v.len() * 2 > s.last - s.first).then(|| Sample {
