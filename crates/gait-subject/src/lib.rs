@@ -5,6 +5,7 @@
 //! track only: where the subject is not in view, its frames stay empty.
 
 pub mod appearance;
+mod bridge;
 mod choose;
 pub mod link;
 pub mod walking;
@@ -157,7 +158,7 @@ impl TrackSummary {
         self.sighting_at(frame).map(|s| s.person)
     }
 
-    fn sighting_at(&self, frame: usize) -> Option<&Sighting> {
+    pub(crate) fn sighting_at(&self, frame: usize) -> Option<&Sighting> {
         let i = self
             .sightings
             .binary_search_by_key(&frame, |s| s.frame)
@@ -215,7 +216,12 @@ pub fn find(
     };
     let walking = tracks[chosen].walk.displacement >= choose::MIN_WALK;
     let bridge = (config.bridge_gap_s * fps).round() as usize;
-    let boxes = bridged(&tracks, chosen, bridge, config.max_colour_distance);
+    let boxes = bridge::boxes(
+        &tracks,
+        chosen,
+        (bridge, limits.max_gap_frames),
+        config.max_colour_distance,
+    );
     Ok(Subject {
         last_frame: frames.last().map_or(0, |f| f.0),
         in_view: ranges(boxes.keys().copied()),
@@ -255,58 +261,6 @@ fn check_point(
         });
     }
     Ok(())
-}
-
-/// The boxes of the chosen track's sightings, with gaps of up to `fill`
-/// frames bridged by linear interpolation, except where someone else is
-/// seen on the bridged box: a sighting of another track there whose colours
-/// differ from the subject's (the pose model would find that person). A
-/// sighting there in the subject's colours is the subject, detected with a
-/// box the linker did not take (half hidden, another size).
-fn bridged(
-    tracks: &[TrackSummary],
-    chosen: usize,
-    fill: usize,
-    max_colour: f32,
-) -> BTreeMap<usize, PersonBox> {
-    let sightings = &tracks[chosen].sightings;
-    let colours = Appearance::mean(sightings.iter().map(|s| &s.appearance));
-    let someone_else = |f: usize, b: &PersonBox| {
-        let others = tracks.iter().enumerate().filter(|(i, _)| *i != chosen);
-        others.filter_map(|(_, t)| t.sighting_at(f)).any(|o| {
-            let on_it = o.person.distance(b) < 0.5 * b.size().max(o.person.size());
-            on_it
-                && colours
-                    .distance(&o.appearance)
-                    .is_none_or(|d| d > max_colour)
-        })
-    };
-    let mut out = BTreeMap::new();
-    for w in sightings.windows(2) {
-        let (a, b) = (&w[0], &w[1]);
-        out.insert(a.frame, a.person);
-        let gap = b.frame - a.frame - 1;
-        if gap == 0 || gap > fill {
-            continue;
-        }
-        for f in a.frame + 1..b.frame {
-            let t = (f - a.frame) as f32 / (b.frame - a.frame) as f32;
-            let mix =
-                |p: [f32; 2], q: [f32; 2]| [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
-            let between = PersonBox {
-                centre: mix(a.person.centre, b.person.centre),
-                top: mix(a.person.top, b.person.top),
-                score: a.person.score.min(b.person.score),
-            };
-            if !someone_else(f, &between) {
-                out.insert(f, between);
-            }
-        }
-    }
-    if let Some(s) = sightings.last() {
-        out.insert(s.frame, s.person);
-    }
-    out
 }
 
 #[cfg(test)]
