@@ -8,21 +8,36 @@ use gait_core::PersonBox;
 use crate::link::Sighting;
 use crate::{Appearance, TrackSummary};
 
+/// How far the subject's boxes reach beyond its sightings, in frames.
+pub(crate) struct Reach {
+    /// Gaps bridged by interpolation.
+    pub fill: usize,
+    /// Gaps that may take the subject's sightings from other tracks.
+    pub max_gap: usize,
+    /// Frames before the first and after the last sighting.
+    pub lead: usize,
+    /// The first and last frame of the pass.
+    pub range: (usize, usize),
+}
+
 /// The boxes of the chosen track's sightings, with the gaps between them
-/// closed in two steps. A gap longer than `fill` (up to `max_gap` frames)
+/// closed in two steps, and carried on for `lead` frames at either end. A gap longer than `fill` (up to `max_gap` frames)
 /// takes the sightings of other tracks that lie on the subject's way across
 /// it (the box interpolated between the sightings either side) in the
 /// subject's colours: the subject, detected with a box the linker gave to
 /// another track. Then gaps of up to `fill` frames are bridged by linear
 /// interpolation, except where someone else is seen on the bridged box: a
 /// sighting of another track there whose colours differ from the subject's
-/// (the pose model would find that person).
+/// (the pose model would find that person). At the ends the box moves on at
+/// the subject's speed over its first or last half second, again not onto
+/// someone else.
 pub(crate) fn boxes(
     tracks: &[TrackSummary],
     chosen: usize,
-    (fill, max_gap): (usize, usize),
+    reach: &Reach,
     max_colour: f32,
 ) -> BTreeMap<usize, PersonBox> {
+    let (fill, max_gap) = (reach.fill, reach.max_gap);
     let own = &tracks[chosen].sightings;
     let look = Lookalike {
         tracks,
@@ -49,7 +64,50 @@ pub(crate) fn boxes(
     if let Some(s) = seen.last() {
         out.insert(s.frame, s.person);
     }
+    for (f, b) in leads(&seen, reach) {
+        if look.someone_else(f, &b).is_none() {
+            out.insert(f, b);
+        }
+    }
     out
+}
+
+/// The boxes of the `lead` frames before and after each stretch of `seen`
+/// that the interpolation bridges (the track's ends and the gaps longer
+/// than `fill`), within the pass, moved on at the speed between the
+/// stretch's end and its sighting nearest half a second (15 frames) from it.
+fn leads(seen: &[Sighting], reach: &Reach) -> Vec<(usize, PersonBox)> {
+    let mut out = Vec::new();
+    let stretches = seen.chunk_by(|a, b| b.frame - a.frame - 1 <= reach.fill);
+    for part in stretches {
+        let (first, last) = (&part[0], &part[part.len() - 1]);
+        let within = |a: &Sighting, s: &&Sighting| s.frame.abs_diff(a.frame) <= 15;
+        let start = part.iter().take_while(|s| within(first, s)).last();
+        let end = part.iter().rev().take_while(|s| within(last, s)).last();
+        let before = first.frame.saturating_sub(reach.lead).max(reach.range.0);
+        let after = (last.frame + reach.lead).min(reach.range.1);
+        out.extend((before..first.frame).map(|f| (f, moved(first, start.unwrap_or(first), f))));
+        out.extend((last.frame + 1..=after).map(|f| (f, moved(last, end.unwrap_or(last), f))));
+    }
+    out
+}
+
+/// The box of `at` moved to `frame` at the speed from `at` to `other`.
+fn moved(at: &Sighting, other: &Sighting, frame: usize) -> PersonBox {
+    let span = other.frame as f32 - at.frame as f32;
+    let k = if span == 0.0 {
+        0.0
+    } else {
+        (frame as f32 - at.frame as f32) / span
+    };
+    let shift = |p: [f32; 2], q: [f32; 2], r: [f32; 2]| {
+        [r[0] + k * (q[0] - p[0]), r[1] + k * (q[1] - p[1])]
+    };
+    PersonBox {
+        centre: shift(at.person.centre, other.person.centre, at.person.centre),
+        top: shift(at.person.centre, other.person.centre, at.person.top),
+        score: at.person.score,
+    }
 }
 
 /// How much further (times `max_colour_distance`) the colours of a sighting
@@ -148,6 +206,15 @@ mod tests {
     use super::*;
     use crate::link::{Track, tests::seen};
 
+    fn reach() -> Reach {
+        Reach {
+            fill: 30,
+            max_gap: 60,
+            lead: 0,
+            range: (0, 200),
+        }
+    }
+
     fn summary(id: usize, sightings: Vec<Sighting>) -> TrackSummary {
         TrackSummary::new(id, Track { sightings }, 30.0)
     }
@@ -170,7 +237,7 @@ mod tests {
         let taken: Vec<Sighting> = (40..80).map(|f| walker(f, 0.32)).collect();
         let other: Vec<Sighting> = (85..91).map(|f| walker(f, 0.8)).collect();
         let tracks = vec![summary(0, own), summary(1, taken), summary(2, other)];
-        let b = boxes(&tracks, 0, (30, 60), 0.1);
+        let b = boxes(&tracks, 0, &reach(), 0.1);
         assert!((0..84).all(|f| b.contains_key(&f)), "{:?}", b.keys());
         assert!((84..120).all(|f| !b.contains_key(&f)), "{:?}", b.keys());
         assert!((120..130).all(|f| b.contains_key(&f)));
@@ -182,13 +249,13 @@ mod tests {
         // In shade, right on her way: 0.13 darker.
         let shade: Vec<Sighting> = (20..26).map(|f| walker(f, 0.17)).collect();
         let tracks = vec![summary(0, own.clone()), summary(1, shade)];
-        assert_eq!(boxes(&tracks, 0, (30, 60), 0.1).len(), 40);
+        assert_eq!(boxes(&tracks, 0, &reach(), 0.1).len(), 40);
         // The same colours a quarter body off her way: someone else.
         let beside: Vec<Sighting> = (20..26)
             .map(|f| seen(f, 1600.0 - 10.0 * f as f32, 400.0, 0.17))
             .collect();
         let tracks = vec![summary(0, own), summary(1, beside)];
-        let b = boxes(&tracks, 0, (30, 60), 0.1);
+        let b = boxes(&tracks, 0, &reach(), 0.1);
         assert!((20..26).all(|f| !b.contains_key(&f)), "{:?}", b.keys());
     }
 }
