@@ -96,20 +96,38 @@ fn bad_corrections_are_one_line_errors_naming_the_entry() {
     );
 }
 
+/// Moves the right toe-off the detector places at 121 to 123, where the manual annotation has it.
+const MOVE_TOE_OFF: &str = "[[event]]\nside = \"right\"\nkind = \"toe_off\"\nframe = 121\naction = \"remove\"\n\
+     [[event]]\nside = \"right\"\nkind = \"toe_off\"\nframe = 123\naction = \"add\"\n";
+
 #[test]
 fn gait_run_applies_the_run_folders_corrections_on_a_rerun() {
     let work = tempfile::tempdir().unwrap();
     let out = work.path().join("run");
     run_ok(&mut common::sample_run(&out, 40, 200));
     let before = events(&out);
-    assert!(!before.contains(&"right,heel_strike,60".to_string()));
-    std::fs::write(out.join("corrections.toml"), ADD_EVENT).unwrap();
+    let (found, annotated) = (
+        "right,toe_off,121".to_string(),
+        "right,toe_off,123".to_string(),
+    );
+    assert!(
+        before.contains(&found) && !before.contains(&annotated),
+        "{before:?}"
+    );
+    std::fs::write(out.join("corrections.toml"), MOVE_TOE_OFF).unwrap();
     // The poses come from the run's cache; only the kinematics change.
     run_ok(&mut common::sample_run(&out, 40, 200));
-    assert!(events(&out).contains(&"right,heel_strike,60".to_string()));
+    let after = events(&out);
+    assert!(
+        after.contains(&annotated) && !after.contains(&found),
+        "{after:?}"
+    );
     let m = read_json(&out.join("run.json"));
     let c = &m["extra"]["kinematics"]["corrections"];
-    assert_eq!(c["events_added"], 1);
+    assert_eq!(
+        (&c["events_added"], &c["events_removed"]),
+        (&1.into(), &1.into())
+    );
     assert_eq!(c["sha256"].as_str().unwrap().len(), 64);
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(

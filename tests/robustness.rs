@@ -83,8 +83,10 @@ fn a_reencoded_video_a_run_s_keypoints_and_a_model_without_feet_give_the_same_an
     run_ok(&mut run_on(&sample_video(), &original));
     let ev = events(&original);
     let cycles = accepted(&original);
-    assert_eq!(ev.len(), 13, "{ev:?}");
-    assert_eq!(cycles.len(), 4, "{cycles:?}");
+    // 14 events (the right heel strike at 60, annotated by hand, since the pose model also
+    // looks 0.2 s before the walker's first detection) and 5 cycles.
+    assert_eq!(ev.len(), 14, "{ev:?}");
+    assert_eq!(cycles.len(), 5, "{cycles:?}");
 
     // H.264 at CRF 18: before issue 37 the bout shrank to 81-158, a false right heel strike
     // came at 81 and only 1 + 1 cycles were accepted.
@@ -93,7 +95,7 @@ fn a_reencoded_video_a_run_s_keypoints_and_a_model_without_feet_give_the_same_an
     let copy = dir.path().join("crf18");
     run_ok(&mut run_on(&video, &copy));
     let (matched, extra) = agreement(&ev, &events(&copy));
-    assert_eq!((matched, extra), (13, 0), "{:?}", events(&copy));
+    assert_eq!((matched, extra), (14, 0), "{:?}", events(&copy));
     assert!(
         same_cycles(&cycles, &accepted(&copy)),
         "{:?}",
@@ -170,8 +172,8 @@ fn a_reencoded_video_a_run_s_keypoints_and_a_model_without_feet_give_the_same_an
     assert!(String::from_utf8_lossy(&out.stderr).contains("from left_ankle/left_ankle"));
     let (matched, extra) = agreement(&ev, &events(&kin));
     assert!(
-        matched >= 11 && extra == 0,
-        "{matched} of 13, {extra} extra: {:?}",
+        matched >= 12 && extra == 0,
+        "{matched} of 14, {extra} extra: {:?}",
         events(&kin)
     );
     assert!(
