@@ -257,11 +257,20 @@ impl ZeniRefined {
         let prom = 0.1 * leg;
         // Speeds over the ground (pixels/s).
         let speed = |j: usize, i: usize| forward_speed(t, dirs, j, i) - ground[i];
+        // Over +-0.25 s, or as much of it as the pelvis is seen: near the start of a track
+        // (a heel strike a few frames after the walker comes into view) the full window would
+        // leave the event on Zeni's extremum, a frame or more from the crossing.
         let walking_speed = |i: usize| -> f64 {
             let w = (0.25 * fps).round().max(1.0) as usize;
-            let (lo, hi) = (i.saturating_sub(w), (i + w).min(n - 1));
-            match (t.pelvis(lo), t.pelvis(hi)) {
-                (Some(a), Some(b)) if hi > lo => {
+            let seen = |k: &usize| t.pelvis(*k).is_some();
+            let lo = (i.saturating_sub(w)..=i).find(seen);
+            let hi = (i..=(i + w).min(n - 1)).rev().find(seen);
+            match (lo, hi) {
+                (Some(lo), Some(hi)) if hi >= lo + w => {
+                    let (a, b) = (
+                        t.pelvis(lo).unwrap_or_default(),
+                        t.pelvis(hi).unwrap_or_default(),
+                    );
                     d(i) * (b.0 - a.0) * fps / (hi - lo) as f64 - ground[i]
                 }
                 _ => f64::NAN,
@@ -470,6 +479,32 @@ mod tests {
                 .all(|(x, y)| x.0 == y.0 && x.1.abs_diff(y.1) <= 1)
         );
         assert_ne!(a, b, "the jitter moves Zeni's extremum");
+    }
+
+    /// A heel strike a few frames after the walker comes into view is placed at its speed
+    /// crossing, as in mid-walk (before, the walking speed over +-0.25 s needed the pelvis
+    /// before the track began, and the event stayed on Zeni's extremum).
+    #[test]
+    fn a_heel_strike_near_the_start_of_the_track_gets_its_crossing() {
+        let full = testing::walker(30.0, 150, |i| 100.0 + 13.0 * i as f64);
+        let dirs = vec![Direction::Right; full.len()];
+        let all = ZeniRefined::default().detect(&full, &dirs);
+        let strike = all
+            .iter()
+            .find(|e| e.event == EventKind::HeelStrike && e.frame > 30)
+            .copied()
+            .unwrap();
+        let mut late = full.clone();
+        for coord in late.x.iter_mut().chain(late.y.iter_mut()) {
+            coord[..strike.frame - 4].fill(f64::NAN);
+        }
+        let found = ZeniRefined::default().detect(&late, &dirs);
+        let again = found.iter().find(|e| e.key() == strike.key()).unwrap();
+        assert!(again.at.is_some(), "{again:?}");
+        assert!(
+            (again.time() - strike.time()).abs() < 0.5,
+            "{again:?} vs {strike:?}"
+        );
     }
 
     #[test]
