@@ -1,4 +1,4 @@
-//! The subject pass on the real people of the sample and of three re-encodings
+//! The subject pass on the real people of the sample and of five re-encodings
 //! (tests/data/subject): the walker is followed through the same frames
 //! whatever the encoding, and never swapped for the man she passes.
 
@@ -16,12 +16,16 @@ fn sightings(name: &str) -> Vec<(usize, Vec<Sighting>)> {
 
 /// The walker's track: (first frame, last frame, frames in view after bridging).
 fn walker(name: &str) -> (usize, usize, usize) {
+    walker_at(name, 30.0)
+}
+
+fn walker_at(name: &str, fps: f64) -> (usize, usize, usize) {
     let frames = sightings(name);
     let s = find(
         &frames,
         PersonChoice::default(),
         &SubjectConfig::default(),
-        30.0,
+        fps,
         (1920, 1080),
     )
     .unwrap();
@@ -50,11 +54,19 @@ fn the_walker_is_followed_the_same_on_every_encoding() {
         f <= 16 && l >= 130 && m >= 110,
         "clip: walker {f}-{l} in {m} frames"
     );
-    for name in ["crf23", "hevc_mov", "mirrored"] {
+    // CRF 28: where her legs come back into view (148/149) her detected size jumps by half and
+    // a second track takes her sightings to 176; the gap in her own track takes them back.
+    for name in ["crf23", "hevc_mov", "mirrored", "crf28"] {
         let (f, l, m) = walker(name);
         assert!(
             f.abs_diff(first) <= 2 && l.abs_diff(last) <= 3 && m + 8 >= n,
             "{name}: walker {f}-{l} in {m} frames; the original {first}-{last} in {n}"
         );
     }
+    // 60 fps by duplicated frames: the same at twice the frame numbers (she was lost from 148).
+    let (f, l, m) = walker_at("fps60_dup", 60.0);
+    assert!(
+        (f / 2).abs_diff(first) <= 2 && (l / 2).abs_diff(last) <= 3 && m / 2 + 8 >= n,
+        "fps60_dup: walker {f}-{l} in {m} frames; the original {first}-{last} in {n}"
+    );
 }
