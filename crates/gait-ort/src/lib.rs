@@ -18,14 +18,19 @@ pub use ort::session::Session;
 pub use gait_core::Device;
 
 /// Opens the ONNX file `path` in the shared environment, on `device`, with
-/// one intra-op thread per core and no busy-waiting workers.
+/// one intra-op thread per two cores and no busy-waiting workers.
 ///
 /// A CUDA request that the loaded library cannot serve fails instead of
 /// silently running on the CPU.
 pub fn session(path: &Path, device: Device) -> Result<Session, SessionError> {
     let runtime = |e: ort::Error<_>| SessionError::Runtime(e.to_string());
     let env = environment().map_err(SessionError::Runtime)?;
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // Half the cores: ffmpeg decodes the next frames and the pipeline prepares crops beside the
+    // model, and BlazePose's small convolutions gain little from more threads. On the 2-core
+    // machine of BENCHMARKS.md one thread took 0.4-1.1 CPU s less on the sample's run than two,
+    // at the same wall time, with identical keypoints.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = (cores / 2).max(1);
     let mut builder = Session::builder(&env)
         .map_err(|e| SessionError::Runtime(e.to_string()))?
         .with_intra_threads(threads)

@@ -127,7 +127,13 @@ impl Driver<'_> {
             .collect();
         if !todo.is_empty() {
             // The pose model reads the frames as they are: no copy when it sees the whole batch.
-            let seen: std::borrow::Cow<[Frame]> = if self.regenerate {
+            // The passthrough regenerator (the default) hands them on unchanged, so they do not
+            // go through it: three copies of every frame (6 MB at 1080p) saved.
+            let identity = self.config.regenerator.is_identity();
+            if self.regenerate && identity {
+                self.record("regenerator").computed += todo.len();
+            }
+            let seen: std::borrow::Cow<[Frame]> = if self.regenerate && !identity {
                 self.regenerated(&todo)?.into()
             } else if todo.len() == frames.len() {
                 frames.into()
