@@ -324,6 +324,18 @@ impl Driver<'_> {
     }
 }
 
+impl Driver<'_> {
+    /// The first frame of the range `first..=last` with a subject to follow (`first` without
+    /// subject tracking, or when the subject is not in view within the range).
+    fn first_wanted(&self, first: usize, last: Option<usize>) -> usize {
+        let seen = self
+            .subject
+            .and_then(|s| s.range(first..).next().map(|(f, _)| *f));
+        seen.filter(|&f| last.is_none_or(|l| f <= l))
+            .unwrap_or(first)
+    }
+}
+
 /// A pass's result: every frame index of the range, the poses of the frames
 /// it processed, and those of them that came from the cache.
 pub(crate) type PassResult = (Vec<usize>, Vec<(usize, Pose)>, BTreeSet<usize>);
@@ -339,9 +351,19 @@ impl Driver<'_> {
     ) -> Result<PassResult, PipelineError> {
         let (first, last) = (self.config.input.first_frame, self.config.input.last_frame);
         let batch_size = self.config.run.batch_size;
-        let mut reader = info.frames()?;
         let mut all = Vec::new();
         let mut out = Vec::new();
+        // Before the range, or before the subject comes into view (every pose empty there),
+        // frames are not read: ffmpeg decodes them but neither converts nor sends them.
+        let start = self.first_wanted(first, last);
+        for f in first..start {
+            bar.tick()?;
+            all.push(f);
+            if pick(f, false) {
+                out.push((f, Pose::empty(self.n_keypoints)));
+            }
+        }
+        let mut reader = info.frames_from(start)?;
         let mut batch = Vec::with_capacity(batch_size);
         // One frame of look-ahead tells whether a frame is the range's last.
         let mut ahead = reader.next_frame()?;

@@ -12,7 +12,7 @@ pub use crate::frame_reader::{FrameReader, READ_AHEAD};
 use crate::frame_reader::{Source, read_ahead};
 use crate::still;
 pub use crate::video_decoder::DecoderRecording;
-use crate::video_decoder::VideoDecoder;
+use crate::video_decoder::{Request, VideoDecoder};
 
 const VIDEO_EXTENSIONS: [&str; 6] = ["mp4", "avi", "mov", "webm", "mkv", "m4v"];
 const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "bmp", "tif"];
@@ -223,17 +223,27 @@ impl InputInfo {
     /// picture that will be shown smaller: decoding straight to that size
     /// saves copying and drawing full frames). Images are read as they are.
     pub fn frames_at(&self, size: Option<(u32, u32)>) -> Result<FrameReader, PipelineError> {
+        self.frames_as(Request { size, from: 0 })
+    }
+
+    /// As [`Self::frames`], from frame `from` on: the frames before it are
+    /// not read (a video's are decoded but not converted or sent).
+    pub fn frames_from(&self, from: usize) -> Result<FrameReader, PipelineError> {
+        self.frames_as(Request { size: None, from })
+    }
+
+    fn frames_as(&self, req: Request) -> Result<FrameReader, PipelineError> {
         let source = match &self.kind {
             Kind::Images(files) => Source::Images(files.clone()),
             Kind::Video => {
                 let mut info = self.clone();
-                if let Some((w, h)) = size {
+                if let Some((w, h)) = req.size {
                     (info.width, info.height) = (w, h);
                 }
                 let inner = FrameReader {
-                    source: Source::Video(VideoDecoder::spawn(&self.path, size)?),
+                    source: Source::Video(VideoDecoder::spawn(&self.path, req)?),
                     info,
-                    next: 0,
+                    next: req.from,
                 };
                 Source::Ahead(read_ahead(inner))
             }
@@ -241,7 +251,7 @@ impl InputInfo {
         Ok(FrameReader {
             info: self.clone(),
             source,
-            next: 0,
+            next: req.from,
         })
     }
 
@@ -402,6 +412,33 @@ mod tests {
             .map(|f| f.image.get_pixel(0, 0)[0])
             .collect();
         assert_eq!(reds, vec![2, 1, 0]);
+    }
+
+    /// Frames read from frame 7 on are the full decode's, bit for bit, under their own numbers.
+    #[test]
+    fn a_video_read_from_a_frame_on_gives_the_same_frames() {
+        let dir = tempfile::tempdir().unwrap();
+        let video = dir.path().join("clip.mp4");
+        let status = std::process::Command::new("ffmpeg")
+            .args(["-v", "error", "-y", "-f", "lavfi", "-i"])
+            .arg("testsrc=size=64x48:rate=30:duration=0.5")
+            .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
+            .arg(&video)
+            .status()
+            .expect("ffmpeg (tools/setup.sh installs it)");
+        assert!(status.success());
+        let info = InputInfo::open(&video).unwrap();
+        let all = |mut r: FrameReader| -> Vec<gait_core::Frame> {
+            std::iter::from_fn(|| r.next_frame().unwrap()).collect()
+        };
+        let full = all(info.frames().unwrap());
+        let late = all(info.frames_from(7).unwrap());
+        assert_eq!(full.len(), 15);
+        assert_eq!(late.len(), 8);
+        for (a, b) in full[7..].iter().zip(&late) {
+            assert_eq!(a.index, b.index);
+            assert!(a.image == b.image, "frame {}", a.index);
+        }
     }
 
     #[test]

@@ -33,16 +33,39 @@ trait FrameSource: Send {
     fn end(&mut self) -> std::io::Result<Ending>;
 }
 
-/// The ffmpeg command that decodes `path` to rgb24 frames on its standard output,
-/// scaled to `size` when given. Only overlay.mp4 asks for a size (a picture shown at most
-/// 720 px high): fast bilinear scaling there costs 0.7 CPU s less than bicubic on the
+/// What a pass asks the decoder for.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Request {
+    /// Frames scaled to this size (only overlay.mp4 asks: a picture shown at most 720 px high).
+    pub size: Option<(u32, u32)>,
+    /// The first frame wanted: those before are decoded, as a video must be, but neither
+    /// converted to RGB nor sent (the pose pass starts where the subject comes into view).
+    pub from: usize,
+}
+
+/// The ffmpeg command that decodes `path` to rgb24 frames on its standard output, as `req`
+/// asks. Fast bilinear scaling for the overlay costs 0.7 CPU s less than bicubic on the
 /// sample (BENCHMARKS.md) and no measure is taken from those frames.
-fn ffmpeg_command(path: &Path, size: Option<(u32, u32)>) -> Command {
+fn ffmpeg_command(path: &Path, req: Request) -> Command {
     let mut cmd = Command::new("ffmpeg");
-    cmd.args(["-v", "error", "-nostdin", "-i"]).arg(path);
-    if let Some((w, h)) = size {
-        cmd.arg("-vf")
-            .arg(format!("scale={w}:{h}:flags=fast_bilinear"));
+    // One decoding thread: the passes wait on the model, not on ffmpeg, and frame threads cost
+    // CPU to coordinate (the sample's VP9 decode: 1.5 CPU s on one thread, 1.75 on two, at
+    // about the same wall time); the frames are the same bits.
+    cmd.args(["-v", "error", "-nostdin", "-threads", "1", "-i"])
+        .arg(path);
+    let mut filters = Vec::new();
+    if req.from > 0 {
+        filters.push(format!("select=gte(n\\,{})", req.from));
+    }
+    if let Some((w, h)) = req.size {
+        filters.push(format!("scale={w}:{h}:flags=fast_bilinear"));
+    }
+    if !filters.is_empty() {
+        cmd.arg("-vf").arg(filters.join(","));
+    }
+    if req.from > 0 {
+        // The frames as they come, none repeated to fill the dropped ones' time.
+        cmd.args(["-fps_mode", "passthrough"]);
     }
     cmd.args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]);
     cmd
@@ -55,8 +78,8 @@ struct Ffmpeg {
 }
 
 impl Ffmpeg {
-    fn spawn(path: &Path, size: Option<(u32, u32)>) -> Result<Self, PipelineError> {
-        let mut child = ffmpeg_command(path, size)
+    fn spawn(path: &Path, req: Request) -> Result<Self, PipelineError> {
+        let mut child = ffmpeg_command(path, req)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -114,7 +137,9 @@ pub struct DecoderRecording {
 impl DecoderRecording {
     /// Runs [`ffmpeg_command`] on `path` to the end and keeps what it wrote.
     pub fn record(path: &Path) -> std::io::Result<Self> {
-        let out = ffmpeg_command(path, None).stdin(Stdio::null()).output()?;
+        let out = ffmpeg_command(path, Request::default())
+            .stdin(Stdio::null())
+            .output()?;
         Ok(DecoderRecording {
             frames: out.stdout,
             success: out.status.success(),
@@ -146,11 +171,11 @@ pub(crate) struct VideoDecoder {
 }
 
 impl VideoDecoder {
-    /// Decodes `path`, scaled to `size` when given.
-    pub(crate) fn spawn(path: &Path, size: Option<(u32, u32)>) -> Result<Self, PipelineError> {
+    /// Decodes `path` as `req` asks.
+    pub(crate) fn spawn(path: &Path, req: Request) -> Result<Self, PipelineError> {
         Ok(VideoDecoder {
             path: path.to_path_buf(),
-            source: Box::new(Ffmpeg::spawn(path, size)?),
+            source: Box::new(Ffmpeg::spawn(path, req)?),
         })
     }
 
