@@ -8,6 +8,7 @@ pub mod appearance;
 mod bridge;
 mod choose;
 pub mod link;
+mod stitch;
 pub mod walking;
 
 use std::collections::BTreeMap;
@@ -209,7 +210,7 @@ pub fn find(
 ) -> Result<Subject, SubjectError> {
     check_point(frames, choice, frame_size)?;
     let limits = config.limits(fps);
-    let tracks: Vec<TrackSummary> = link::stitch(link::link(frames, &limits), &limits)
+    let tracks: Vec<TrackSummary> = stitch::stitch(link::link(frames, &limits), &limits)
         .into_iter()
         .enumerate()
         .map(|(id, t)| TrackSummary::new(id, t, fps))

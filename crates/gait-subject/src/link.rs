@@ -50,19 +50,14 @@ const MAX_TILT: f32 = std::f32::consts::FRAC_PI_4;
 /// the mirrored sample (CRF 12) was lost where she passes the man.
 const UNSEEN_COST: f32 = 0.18;
 
-/// Two tracks are one person only when their boxes coincide in at least this
-/// many frames (or in every frame of the shorter one): a single shared frame
-/// is a chance, e.g. where the walker passes in front of someone.
-const MIN_SHARED: usize = 3;
-
 impl Track {
-    fn last(&self) -> &Sighting {
+    pub(crate) fn last(&self) -> &Sighting {
         &self.sightings[self.sightings.len() - 1]
     }
 
     /// The body size now: the median of the last few sightings (one odd
     /// detection does not change it).
-    fn size(&self) -> f32 {
+    pub(crate) fn size(&self) -> f32 {
         let mut s: Vec<f32> = self.recent(5).map(|x| x.person.size()).collect();
         s.sort_by(f32::total_cmp);
         s[s.len() / 2]
@@ -90,14 +85,14 @@ impl Track {
     /// How far `s` lies from where this track predicts it (in body sizes), and
     /// how far it may: the prediction grows uncertain with the gap (a walker
     /// covers about 0.02 body sizes a frame, a runner 0.07).
-    fn offset(&self, s: &Sighting) -> (f32, f32) {
+    pub(crate) fn offset(&self, s: &Sighting) -> (f32, f32) {
         let dt = s.frame.saturating_sub(self.last().frame);
         let p = self.predict(s.frame);
         let d = (p[0] - s.person.centre[0]).hypot(p[1] - s.person.centre[1]);
         (d / self.size().max(1.0), (0.2 + 0.04 * dt as f32).min(1.0))
     }
 
-    fn appearance(&self) -> Appearance {
+    pub(crate) fn appearance(&self) -> Appearance {
         Appearance::mean(self.recent(10).map(|s| &s.appearance))
     }
 
@@ -175,96 +170,6 @@ fn upright(s: &Sighting) -> bool {
     (tx - cx).abs().atan2(cy - ty) < MAX_TILT
 }
 
-/// Joins tracks that are one person seen twice: the detector sometimes
-/// returns a second box on the same body (another size, half the body), and
-/// the linker then starts a second track that takes over from the first one
-/// (e.g. where the person turns and the first track's prediction misses).
-/// Two tracks are joined when they overlap in time, both are seen in at
-/// least half the frames where either is seen over that time, their boxes
-/// coincide (centres within a third of the body size) in every frame both
-/// are seen, and their colours match. Also joined: a track that starts
-/// within a detector miss of another's end, where that one was heading, in
-/// its colours, at up to twice the size ratio a link allows (the detector's
-/// size of a walker jumps where she turns or her arms swing wide).
-pub fn stitch(mut tracks: Vec<Track>, limits: &LinkLimits) -> Vec<Track> {
-    let mut i = 0;
-    while i < tracks.len() {
-        let mut j = i + 1;
-        while j < tracks.len() {
-            let (a, b) = (&tracks[i], &tracks[j]);
-            if same_person(a, b, limits) || continues(a, b, limits) || continues(b, a, limits) {
-                let other = tracks.remove(j);
-                merge(&mut tracks[i], other);
-                j = i + 1;
-            } else {
-                j += 1;
-            }
-        }
-        i += 1;
-    }
-    tracks
-}
-
-fn same_person(a: &Track, b: &Track, limits: &LinkLimits) -> bool {
-    let mut shared = 0;
-    for s in &a.sightings {
-        let Ok(k) = b.sightings.binary_search_by_key(&s.frame, |x| x.frame) else {
-            continue;
-        };
-        let o = &b.sightings[k];
-        let size = s.person.size().max(o.person.size()).max(1.0);
-        if s.person.distance(&o.person) > size / 3.0 {
-            return false;
-        }
-        shared += 1;
-    }
-    let colours = a.appearance().distance(&b.appearance());
-    let shorter = a.sightings.len().min(b.sightings.len());
-    // One body seen twice gives two boxes in most frames where both tracks
-    // run; two people meet for a few frames of a long common span.
-    let (first, last) = (
-        a.sightings[0].frame.max(b.sightings[0].frame),
-        a.last().frame.min(b.last().frame),
-    );
-    let in_span = |t: &Track| {
-        t.sightings
-            .iter()
-            .filter(|s| (first..=last).contains(&s.frame))
-            .count()
-    };
-    let either = in_span(a) + in_span(b) - shared;
-    shared >= MIN_SHARED.min(shorter)
-        && 2 * shared >= either
-        && colours.is_some_and(|c| c <= limits.max_colour_distance)
-}
-
-/// Whether `b` takes over where `a` ended (see [`stitch`]).
-fn continues(a: &Track, b: &Track, limits: &LinkLimits) -> bool {
-    let (end, start) = (a.last(), &b.sightings[0]);
-    if start.frame <= end.frame || start.frame - end.frame > limits.short_gap_frames + 1 {
-        return false;
-    }
-    let (d, reach) = a.offset(start);
-    let size = a.size().max(1.0);
-    let early = Track {
-        sightings: b.sightings.iter().take(5).copied().collect(),
-    };
-    let ratio = (early.size().max(1.0) / size).ln().abs();
-    let colours = a.appearance().distance(&b.appearance());
-    d <= reach
-        && ratio <= 2.0 * limits.max_size_ratio.ln()
-        && colours.is_some_and(|c| c <= limits.max_colour_distance)
-}
-
-/// `b`'s sightings added to `a`; where both saw the person, `a`'s stay.
-fn merge(a: &mut Track, b: Track) {
-    for s in b.sightings {
-        if let Err(k) = a.sightings.binary_search_by_key(&s.frame, |x| x.frame) {
-            a.sightings.insert(k, s);
-        }
-    }
-}
-
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -331,27 +236,6 @@ pub(crate) mod tests {
                 .skip(1)
                 .all(|t| t.sightings.iter().all(|s| s.appearance.0[0] == 0.7))
         );
-    }
-
-    #[test]
-    fn a_second_box_on_the_same_body_is_stitched_to_its_track() {
-        let first = Track {
-            sightings: (0..20)
-                .map(|f| seen(f, 500.0 - 5.0 * f as f32, 400.0, 0.3))
-                .collect(),
-        };
-        // From frame 15 a bigger box on the same body, which carries on.
-        let second = Track {
-            sightings: (15..40)
-                .map(|f| seen(f, 505.0 - 5.0 * f as f32, 520.0, 0.3))
-                .collect(),
-        };
-        let other = Track {
-            sightings: (15..40).map(|f| seen(f, 900.0, 400.0, 0.3)).collect(),
-        };
-        let tracks = stitch(vec![first, second, other], &LIMITS);
-        assert_eq!(tracks.len(), 2);
-        assert_eq!(tracks[0].sightings.len(), 40);
     }
 
     #[test]
