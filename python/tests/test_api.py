@@ -4,6 +4,8 @@ import json
 import pathlib
 import re
 import shutil
+import subprocess
+import urllib.request
 
 import pandas as pd
 import pytest
@@ -14,7 +16,9 @@ from conftest import (
     TABLES,
     assert_frames_equal,
     cli,
+    cli_env,
     compare_run_dirs,
+    gait_bin,
     read_dlc,
 )
 
@@ -122,8 +126,12 @@ def test_kin_equals_the_kin_command(gait, tmp_path, keypoints_csv, fps, read):
             assert table is None, name
             continue
         assert_frames_equal(table, pd.read_csv(run.dir / f"{name}.csv"), name)
-    # kin.json names the command's keypoints file for `gait review`; gait.kin takes a table.
-    assert compare_run_dirs(tmp_path / "cli", run.dir, skip=("kin.json",)) == []
+    # kin.json names the keypoints for `gait review`: the command's file, gait.kin's table kept
+    # as keypoints.csv in the folder.
+    assert compare_run_dirs(tmp_path / "cli", run.dir, skip=("kin.json", "keypoints.csv")) == []
+    manifest = json.loads((run.dir / "kin.json").read_text())
+    assert pathlib.Path(manifest["keypoints"]) == (run.dir / "keypoints.csv").resolve()
+    assert manifest["fps"] == fps and manifest["tool"].startswith("gait.kin")
     assert len(run.events) > 4
     if frontal:
         assert set(run.frontal_cycles["side"]) == {"left", "right"}
@@ -207,3 +215,23 @@ def test_visit_runs_combines_a_front_and_a_side_view(gait, tmp_path):
     assert (v.spatiotemporal["parameter"] == "stride_time").any()
     with pytest.raises(gait.InputError, match="view `sideways`"):
         gait.visit_runs(tmp_path / "bad", [("sideways", front)])
+
+
+def test_a_gait_kin_folder_opens_in_gait_review(gait, tmp_path):
+    """gait.kin's folder opens as `gait review DIR` (the command its checklist's links run), with
+    the events of its events.csv: kin.json names the table kept as keypoints.csv."""
+    keypoints = read_dlc(SUBJECT_KEYPOINTS)
+    run = gait.kin(keypoints, fps=30, out=tmp_path / "kin",
+                   set={"kinematics.frame_size": [1768, 994], "report.pdf": False})
+    review = subprocess.Popen([str(gait_bin()), "review", str(run.dir)], cwd=ROOT, env=cli_env(),
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        url = review.stdout.readline().strip()
+        assert url.startswith("http://127.0.0.1:"), (url, review.stderr.read() if review.poll() else "")
+        base, token = url.split("?")[0].rstrip("/"), url.split("token=")[1]
+        with urllib.request.urlopen(f"{base}/api/analysis?token={token}", timeout=60) as reply:
+            data = json.loads(reply.read())
+    finally:
+        review.kill()
+        review.wait()
+    assert len(data["events"]) == len(run.events) > 4

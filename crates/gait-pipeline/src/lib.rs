@@ -15,6 +15,7 @@ pub mod folder_lock;
 mod frame_reader;
 pub mod input;
 pub mod interpolate;
+mod kin_manifest;
 pub mod manifest;
 mod message;
 pub mod outputs;
@@ -37,6 +38,7 @@ pub use cache::{entry_bytes as cache_entry_bytes, read_entry as read_cache_entry
 pub use config::PipelineConfig;
 pub use error::PipelineError;
 pub use folder_lock::FolderLock;
+pub use kin_manifest::{KinSource, write_kin_keypoints, write_kin_manifest};
 pub use message::one_line;
 pub use outputs::{OutputOptions, Outputs, write_outputs};
 pub use overlay::regenerated_dir;

@@ -83,20 +83,15 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-/// kin.json: what `gait review OUT` needs to open the folder as the run it is (the keypoints
-/// file, the frame rate and the resolved config with its `--set`s), so the checklist's
-/// `gait review OUT --frame N` works for `gait kin` folders as for `gait run` ones.
+/// kin.json beside the outputs, so that `gait review OUT --frame N` opens the folder.
 fn write_manifest(args: &Args, fps: f64, config: &PipelineConfig) -> Result<(), CliError> {
-    let keypoints = std::fs::canonicalize(&args.keypoints).unwrap_or(args.keypoints.clone());
-    let manifest = serde_json::json!({
-        "tool": format!("gait kin {}", env!("CARGO_PKG_VERSION")),
-        "keypoints": keypoints,
-        "fps": fps,
-        "individual": args.individual,
-        "config": config,
-    });
-    let path = args.out.join("kin.json");
-    let text = serde_json::to_string_pretty(&manifest).map_err(|e| CliError::new(e.to_string()))?;
-    std::fs::write(&path, text)
-        .map_err(|e| CliError::new(format!("writing {}: {e}", path.display())))
+    let tool = format!("gait kin {}", env!("CARGO_PKG_VERSION"));
+    let source = gait_pipeline::KinSource {
+        keypoints: &args.keypoints,
+        fps,
+        individual: args.individual.as_deref(),
+        tool: &tool,
+    };
+    gait_pipeline::write_kin_manifest(&args.out, &source, config)
+        .map_err(|e| CliError::new(e.to_string()))
 }
