@@ -127,9 +127,10 @@ impl Driver<'_> {
             .collect();
         if !todo.is_empty() {
             // The pose model reads the frames as they are: no copy when it sees the whole batch.
-            // The passthrough regenerator (the default) hands them on unchanged, so they do not
-            // go through it: three copies of every frame (6 MB at 1080p) saved.
-            let identity = self.config.regenerator.is_identity();
+            // The passthrough regenerator (the default, without an edge stage) hands them on
+            // unchanged, so they do not go through it: three copies of every frame (6 MB at
+            // 1080p) saved. With an edge stage configured the edges are still made (and cached).
+            let identity = self.config.regenerator.is_identity() && self.stages.edge.is_none();
             if self.regenerate && identity {
                 self.record("regenerator").computed += todo.len();
             }
