@@ -100,7 +100,7 @@ impl Track {
     /// this person (too far, another size, other colours after a gap).
     fn cost(&self, s: &Sighting, limits: &LinkLimits) -> Option<f32> {
         let dt = s.frame - self.last().frame;
-        if dt == 0 || dt > limits.max_gap_frames + 1 {
+        if dt == 0 || dt > limits.max_gap_frames.saturating_add(1) {
             return None;
         }
         let size = self.size().max(1.0);
