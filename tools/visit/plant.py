@@ -62,6 +62,7 @@ CASES = {
     "vaulting_3": ("vaulting", 3, "cm"), "vaulting_6": ("vaulting", 6, "cm"),
     "knee_flexed_7": ("knee_flexed", 7, "deg"), "knee_flexed_15": ("knee_flexed", 15, "deg"),
     "short_stance_10": ("short_stance", 10, "percent"),
+    "trunk_flexion_15": ("trunk_flexion", 15, "deg"),
 }
 
 
@@ -223,6 +224,26 @@ def trunk_lean(lms, w, size):
             z = v[2] * math.cos(a) + v[1] * math.sin(a)
             y = -v[2] * math.sin(a) + v[1] * math.cos(a)
             lm[f"{s}_shoulder"] = [c[0] + v[0], c[1] + y, c[2] + z]
+
+
+def trunk_flexion(lms, size, forward):
+    """Shoulders turned forward about the mid-hip point around the lateral (z) axis, all the
+    time: a trunk bent forward by `size` deg more than the walker's own (both sides)."""
+    a = math.radians(size) * forward
+    for lm in lms:
+        c = df.mid(lm["left_hip"], lm["right_hip"])
+        for s in ("left", "right"):
+            v = df.sub(lm[f"{s}_shoulder"], c)
+            # (x, y) turned by a: an upward vector (0, 1) goes to (sin a, cos a), toward +x.
+            x = v[0] * math.cos(a) + v[1] * math.sin(a)
+            y = -v[0] * math.sin(a) + v[1] * math.cos(a)
+            lm[f"{s}_shoulder"] = [c[0] + x, c[1] + y, c[2] + v[2]]
+
+
+def trunk_flexion_deg(lm, forward):
+    """The trunk's forward lean from the vertical in the walking plane (deg)."""
+    v = df.sub(df.mid(lm["left_shoulder"], lm["right_shoulder"]), df.mid(lm["left_hip"], lm["right_hip"]))
+    return math.degrees(math.atan2(forward * v[0], v[1]))
 
 
 def shift(lms, w, names_mm):
@@ -413,8 +434,11 @@ def measure(dev, lms, ph, fps, with_trunk):
     st, sw = {s: plateau(len(lms), ph[s][0], fps) for s in ph}, {s: plateau(len(lms), ph[s][1], fps) for s in ph}
     wrapped = [{"landmark_positions": lm} for lm in lms]
     out = {}
+    forward = 1.0 if lms[-1]["left_hip"][0] > lms[0]["left_hip"][0] else -1.0
     for s in ("right", "left"):
-        if dev == "trunk_lean" and with_trunk:
+        if dev == "trunk_flexion" and with_trunk:
+            out[s] = mean(trunk_flexion_deg(lms[i], forward) for i in full(st[s]))
+        elif dev == "trunk_lean" and with_trunk:
             out[s] = mean(df.frontal_angles(lms[i], True)[f"trunk_lean_{s}"] for i in full(st[s]))
         elif dev == "wide_base":
             o = "left" if s == "right" else "right"
@@ -442,7 +466,8 @@ def measure(dev, lms, ph, fps, with_trunk):
 UNITS = {"trunk_lean": "deg toward the side, in its stance", "wide_base": "cm heel-to-heel at its heel strikes",
          "circumduction": "cm lateral excursion per stride", "hip_hike": "deg obliquity of its hip, in its swing",
          "vaulting": "cm height of the standing heel while it swings", "knee_flexed": "deg knee flexion in its stance",
-         "short_stance": "s heel strike to toe lift"}
+         "short_stance": "s heel strike to toe lift",
+         "trunk_flexion": "deg forward from the vertical, in its stance"}
 
 
 # ---------------------------------------------------------------- main
@@ -485,7 +510,7 @@ def plant_trial(trial, d, out_root):
     written, skipped = [], {}
     base = [f["landmark_positions"] for f in frames]
     for case, (dev, size, unit_) in CASES.items():
-        if dev == "trunk_lean" and not with_trunk:
+        if dev in ("trunk_lean", "trunk_flexion") and not with_trunk:
             skipped[case] = "no shoulder markers in this trial (gaitkit writes them as 0, 0, 0)"
             continue
         lms = copy.deepcopy(base)
@@ -494,6 +519,9 @@ def plant_trial(trial, d, out_root):
         if dev == "trunk_lean":
             trunk_lean(lms, st_w, size)
             spans = clipped(stances, n)
+        elif dev == "trunk_flexion":
+            trunk_flexion(lms, size, 1.0 if pelvis_x[-1] > pelvis_x[0] else -1.0)
+            spans = [[0, n - 1]]
         elif dev == "wide_base":
             shift(lms, [1.0] * n, [(f"{PLANTED}_{j}", lateral(size * 10)) for j in FOOT]
                   + [(f"{PLANTED}_knee", lateral(size * 5))])
@@ -520,7 +548,8 @@ def plant_trial(trial, d, out_root):
             note = "toe-offs " + ", ".join(f"{t} -> {nt}" for t, nt in moved)
             note += f"; straight-leg frames {straight}" if straight else ""
         cdir = root / case
-        plant = {"deviation": dev, "size": size, "unit": unit_, "side": None if dev == "none" else PLANTED,
+        side = {"none": None, "trunk_flexion": "both"}.get(dev, PLANTED)
+        plant = {"deviation": dev, "size": size, "unit": unit_, "side": side,
                  "frames": spans}
         if dev == "short_stance":
             plant["toe_offs"] = moved
