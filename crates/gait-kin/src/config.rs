@@ -219,9 +219,11 @@ pub struct KinematicsConfig {
     /// A stride whose median thigh or shank length differs from the bout's median by more than
     /// this fraction is rejected.
     pub cycle_segment_tolerance: f64,
-    /// A stride in which the swap correction exchanged the leg labels in more than this share
-    /// of its frames is rejected (0: any corrected frame rejects). A few single-frame label
-    /// flips, corrected, are ordinary for BlazePose's far leg; many mean the labels are unsure.
+    /// A stride whose leg labels are in doubt in more than this share of its frames is rejected
+    /// (0: any such frame rejects). In doubt: the swap correction could hardly tell left from
+    /// right (see `swap::ContinuitySwap::doubt_frames`). Labels it exchanged back with clear
+    /// evidence do not count: single-frame flips of BlazePose's far leg are ordinary, and how
+    /// many of them a stride had tipped with the encoding (3 or 4 of 37 frames).
     pub cycle_max_swapped_share: f64,
     /// A stride whose leg (median thigh + shank over the stride, pixels) is shorter than this is
     /// rejected: the walker is too small in the image for the pose model's keypoints to hold

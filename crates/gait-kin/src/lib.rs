@@ -284,6 +284,7 @@ fn run_chain(
         gated: &c.gated,
         raw_likelihood: &c.raw_likelihood,
         swapped: &c.swapped,
+        unsure: &c.unsure,
         bouts: &bouts,
         enforce_bouts,
         excluded: &fixes.exclude,
@@ -388,6 +389,8 @@ struct Cleaned {
     raw_likelihood: Vec<Vec<f64>>,
     /// Frames the automatic swap correction exchanged, outside the ranges a person swapped.
     swapped: Vec<bool>,
+    /// Frames whose leg labels are in doubt, outside the ranges a person swapped.
+    unsure: Vec<bool>,
     /// Frames whose lower legs were dropped as collapsed.
     collapsed: usize,
 }
@@ -436,17 +439,29 @@ fn clean(
             "lower-leg keypoints dropped in {collapsed_frames} frames where both legs were drawn on one"
         ));
     }
-    let mut swapped = match steps.swap {
-        _ if view.is_frontal() => frontal::labels::fix(&mut t, view),
-        Some(s) => s.correct(&mut t),
-        None => vec![false; n],
+    let swap::Labels {
+        mut swapped,
+        mut unsure,
+    } = match steps.swap {
+        _ if view.is_frontal() => {
+            let swapped = frontal::labels::fix(&mut t, view);
+            swap::Labels {
+                unsure: swapped.clone(),
+                swapped,
+            }
+        }
+        Some(s) => s.correct_judged(&mut t),
+        None => swap::Labels {
+            swapped: vec![false; n],
+            unsure: vec![false; n],
+        },
     };
     for i in (0..n).filter(|&i| swapped[i]) {
         swap::swap_frame(&mut raw, i);
     }
     // A person's swaps come after the automatic correction, which therefore cannot undo them;
     // their frames stop counting as swapped (a confirmed fix, see `apply_swaps`).
-    corrections::apply_swaps(fixes, &mut t, &mut raw, &mut swapped);
+    corrections::apply_swaps(fixes, &mut t, &mut raw, [&mut swapped, &mut unsure]);
     let swapped_frames = swapped.iter().filter(|&&s| s).count();
     if swapped_frames > 0 {
         warnings.push(format!(
@@ -506,6 +521,7 @@ fn clean(
         gated,
         raw_likelihood: raw.likelihood,
         swapped,
+        unsure,
         collapsed: collapsed_frames,
     }
 }

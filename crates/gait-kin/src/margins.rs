@@ -72,7 +72,7 @@ pub fn cycles(q: &[CycleQuality], kin: &KinematicsConfig) -> Vec<CycleMargin> {
                 ("segment_length", segment / tol),
                 (
                     "swap",
-                    c.swapped_frames as f64 / (kin.cycle_max_swapped_share * frames),
+                    c.unsure_frames as f64 / (kin.cycle_max_swapped_share * frames),
                 ),
                 ("small_subject", kin.cycle_min_leg_px / c.leg_px),
             ];
@@ -121,6 +121,7 @@ mod tests {
             shank_ratio: 0.97,
             leg_px: 190.0,
             swapped_frames: 0,
+            unsure_frames: 0,
             bout: Some(0),
         };
         let m = cycles(&[q], &kin);

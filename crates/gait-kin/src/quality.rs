@@ -81,7 +81,7 @@ impl Reason {
                 "thigh or shank length more than {:.0} % from the bout's median",
                 100.0 * kin.cycle_segment_tolerance
             ),
-            Reason::Swap => "leg labels exchanged by the swap correction".into(),
+            Reason::Swap => "leg labels in doubt (left and right could not be told apart)".into(),
             Reason::CrossesBout => "not inside one walking bout".into(),
             Reason::Excluded => "over frames excluded in the corrections".into(),
             Reason::SmallSubject => format!(
@@ -117,6 +117,9 @@ pub struct CycleQuality {
     pub leg_px: f64,
     /// Frames inside the stride whose leg labels the swap correction exchanged.
     pub swapped_frames: usize,
+    /// Frames inside the stride whose leg labels are in doubt (judged by
+    /// `cycle_max_swapped_share`): a clean exchange, corrected, is not.
+    pub unsure_frames: usize,
     /// Index into the bouts of the bout holding the whole stride.
     pub bout: Option<usize>,
 }
@@ -148,6 +151,8 @@ pub struct Evidence<'a> {
     pub raw_likelihood: &'a [Vec<f64>],
     /// Frames whose labels the automatic swap correction exchanged (not those a person swapped).
     pub swapped: &'a [bool],
+    /// Frames whose leg labels the swap correction could not tell with confidence.
+    pub unsure: &'a [bool],
     pub bouts: &'a [Bout],
     /// Whether a stride must lie in one bout (not for events from a file with detected bouts:
     /// the user's events say where the walking is).
@@ -300,6 +305,7 @@ fn measure(ev: &Evidence, s: &Stride, reference: [f64; 2], median_s: f64) -> Cyc
         shank_ratio: own[1] / reference[1],
         leg_px: px[0] + px[1],
         swapped_frames: ev.swapped[a..=b].iter().filter(|&&x| x).count(),
+        unsure_frames: ev.unsure[a..=b].iter().filter(|&&x| x).count(),
         bout: None,
     }
 }
@@ -331,7 +337,7 @@ fn verdict(q: &CycleQuality, kin: &KinematicsConfig, enforce_bouts: bool) -> Vec
         ),
         (
             Reason::Swap,
-            q.swapped_frames as f64
+            q.unsure_frames as f64
                 > kin.cycle_max_swapped_share * (q.last_frame - q.first_frame + 1) as f64 + eps,
         ),
         (Reason::CrossesBout, enforce_bouts && q.bout.is_none()),

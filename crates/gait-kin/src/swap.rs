@@ -7,6 +7,26 @@ use crate::tracks::{LEG, LOWER_LEG, Tracks, dist};
 /// Returns, per frame of `tracks`, whether it was swapped.
 pub trait SwapCorrector {
     fn correct(&self, tracks: &mut Tracks) -> Vec<bool>;
+
+    /// As [`Self::correct`], and per frame whether its labels are a guess rather than evidence
+    /// (the cycle check rejects strides with many: `cycle_max_swapped_share`). By default every
+    /// exchanged frame counts as one.
+    fn correct_judged(&self, tracks: &mut Tracks) -> Labels {
+        let swapped = self.correct(tracks);
+        Labels {
+            unsure: swapped.clone(),
+            swapped,
+        }
+    }
+}
+
+/// A swap correction's verdict per frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Labels {
+    /// The labels were exchanged (and have been exchanged back).
+    pub swapped: Vec<bool>,
+    /// The labels, exchanged or not, are in doubt.
+    pub unsure: Vec<bool>,
 }
 
 /// Two-state (kept / swapped) Viterbi over frames. The cost of a labelling is how far each
@@ -27,6 +47,12 @@ pub struct ContinuitySwap {
     /// labels are free. 0.15 s bridges a dropped collapse (`collapse::CollapseRule`, up to
     /// 0.1 s) with a frame to spare.
     pub max_link_s: f64,
+    /// A frame's labels are in doubt when the labelling the other way round would cost less
+    /// than this many frames' `swap_price` more: the continuity evidence hardly outweighs the
+    /// trust in the model. A clean exchange of a leg, even for a single frame, wins by ten
+    /// times that (2-8 leg lengths on the bundled sample and its re-encodings); legs that
+    /// cross or that the model draws half on each other are decided by 0.05-0.3.
+    pub doubt_frames: f64,
 }
 
 impl Default for ContinuitySwap {
@@ -35,6 +61,7 @@ impl Default for ContinuitySwap {
         Self {
             swap_price: 6.0,
             max_link_s: 0.15,
+            doubt_frames: 1.5,
         }
     }
 }
@@ -94,10 +121,18 @@ impl ContinuitySwap {
     /// linked. A frame in between with some leg keypoints (one side only, or the hips only)
     /// takes the labels of the observed frame before it (after it at the start).
     pub fn detect(&self, t: &Tracks) -> Vec<bool> {
+        self.decide(t).0
+    }
+
+    /// [`Self::detect`]'s swap state per frame, and per frame how sure it is: the margin, in
+    /// pixels of continuity cost, by which the best labelling with that frame the other way
+    /// round loses (infinite where a frame has no leg keypoint).
+    pub fn decide(&self, t: &Tracks) -> (Vec<bool>, Vec<f64>) {
         let n = t.len();
         let pairs = leg_pairs(t);
+        let mut margins = vec![f64::INFINITY; n];
         if n == 0 || pairs.is_empty() {
-            return vec![false; n];
+            return (vec![false; n], margins);
         }
         let fps = if t.fps > 0.0 { t.fps } else { 30.0 };
         let lower: Vec<[usize; 2]> = LOWER_LEG
@@ -114,58 +149,36 @@ impl ContinuitySwap {
         let m = obs.len();
         let mut swapped = vec![false; n];
         if m == 0 {
-            return swapped;
+            return (swapped, margins);
         }
         let max_link = ((self.max_link_s * fps).round() as usize).max(1);
         let near = |x: usize, y: usize| x - y <= max_link;
-        // State (s_prev, s_cur) encoded as 2 * s_prev + s_cur.
         let price = self.swap_price * median_leg_length(t).unwrap_or(0.0) / fps;
-        let mut score = [0.0, price, 0.0, price];
-        let mut back: Vec<[usize; 4]> = vec![[0; 4]; m];
-        for k in 1..m {
-            let (a, b) = (obs[k], obs[k - 1]);
-            let c = (k >= 2 && near(b, obs[k - 2])).then(|| obs[k - 2]);
-            let mut next = [f64::INFINITY; 4];
-            for (state, slot) in next.iter_mut().enumerate() {
-                let (s1, s) = (state >> 1, state & 1);
-                for s2 in 0..2 {
-                    let from = 2 * s2 + s1;
-                    let cost = if near(a, b) {
-                        Self::cost(t, &pairs, (a, b, c), (s, s1, s2)).unwrap_or(0.0)
+        // steps[k][4 * s2 + 2 * s1 + s]: the cost of the step into observed frame k with labels
+        // s there, s1 at k - 1 and s2 at k - 2 (1 = exchanged).
+        let steps: Vec<[f64; 8]> = (0..m)
+            .map(|k| {
+                let mut c = [0.0; 8];
+                if k == 0 {
+                    return c;
+                }
+                let (a, b) = (obs[k], obs[k - 1]);
+                let before = (k >= 2 && near(b, obs[k - 2])).then(|| obs[k - 2]);
+                for (i, v) in c.iter_mut().enumerate() {
+                    let (s2, s1, s) = (i >> 2, (i >> 1) & 1, i & 1);
+                    let fit = if near(a, b) {
+                        Self::cost(t, &pairs, (a, b, before), (s, s1, s2)).unwrap_or(0.0)
                     } else {
                         0.0
                     };
                     // A negligible price per label change breaks exact ties (legs on top of
                     // each other) in favour of fewer changes.
-                    let v = score[from]
-                        + cost
-                        + if s != s1 { 1e-6 } else { 0.0 }
-                        + if s == 1 { price } else { 0.0 };
-                    if v < *slot {
-                        *slot = v;
-                        back[k][state] = from;
-                    }
+                    *v = fit + if s != s1 { 1e-6 } else { 0.0 } + if s == 1 { price } else { 0.0 };
                 }
-            }
-            // Keep scores small; only differences matter.
-            let low = next.iter().copied().fold(f64::INFINITY, f64::min);
-            score = next.map(|v| v - low);
-        }
-        let mut state = (0..4)
-            .min_by(|&a, &b| score[a].total_cmp(&score[b]))
-            .unwrap_or(0);
-        let mut on_obs = vec![false; m];
-        for k in (0..m).rev() {
-            on_obs[k] = state & 1 == 1;
-            if k == 0 {
-                break;
-            }
-            if k == 1 {
-                on_obs[0] = state >> 1 == 1;
-                break;
-            }
-            state = back[k][state];
-        }
+                c
+            })
+            .collect();
+        let (on_obs, margin_obs) = viterbi(&steps, price);
         // Every frame with a leg keypoint takes the state of the last observed frame up to it;
         // a frame with no leg keypoint on either side cannot be "swapped".
         let mut k = 0;
@@ -177,9 +190,74 @@ impl ContinuitySwap {
                 .iter()
                 .any(|p| t.at(p[0], i).is_some() || t.at(p[1], i).is_some());
             *s = any && on_obs[k];
+            margins[i] = if any { margin_obs[k] } else { f64::INFINITY };
         }
-        swapped
+        (swapped, margins)
     }
+}
+
+/// Best labels per observed frame over a two-frame-memory chain (state `2 * s_prev + s`), and
+/// each frame's margin: how much more the best labelling with that frame's labels the other
+/// way round would cost (forward and backward min-costs).
+fn viterbi(steps: &[[f64; 8]], price: f64) -> (Vec<bool>, Vec<f64>) {
+    let m = steps.len();
+    let norm = |v: [f64; 4]| {
+        let low = v.iter().copied().fold(f64::INFINITY, f64::min);
+        v.map(|x| x - low)
+    };
+    let mut fwd = vec![[0.0, price, 0.0, price]; m];
+    let mut back: Vec<[usize; 4]> = vec![[0; 4]; m];
+    for k in 1..m {
+        let mut next = [f64::INFINITY; 4];
+        for (state, slot) in next.iter_mut().enumerate() {
+            let (s1, s) = (state >> 1, state & 1);
+            for s2 in 0..2 {
+                let v = fwd[k - 1][2 * s2 + s1] + steps[k][4 * s2 + 2 * s1 + s];
+                if v < *slot {
+                    *slot = v;
+                    back[k][state] = 2 * s2 + s1;
+                }
+            }
+        }
+        fwd[k] = norm(next);
+    }
+    let mut bwd = vec![[0.0; 4]; m];
+    for k in (0..m.saturating_sub(1)).rev() {
+        let mut here = [f64::INFINITY; 4];
+        for (state, slot) in here.iter_mut().enumerate() {
+            let (s1, s) = (state >> 1, state & 1);
+            for s_next in 0..2 {
+                let v = steps[k + 1][4 * s1 + 2 * s + s_next] + bwd[k + 1][2 * s + s_next];
+                *slot = slot.min(v);
+            }
+        }
+        bwd[k] = norm(here);
+    }
+    let mut state = (0..4)
+        .min_by(|&a, &b| fwd[m - 1][a].total_cmp(&fwd[m - 1][b]))
+        .unwrap_or(0);
+    let mut on_obs = vec![false; m];
+    for k in (0..m).rev() {
+        on_obs[k] = state & 1 == 1;
+        if k == 0 {
+            break;
+        }
+        if k == 1 {
+            on_obs[0] = state >> 1 == 1;
+            break;
+        }
+        state = back[k][state];
+    }
+    let margins = (0..m)
+        .map(|k| {
+            let best = |s: usize| {
+                let total = |s1: usize| fwd[k][2 * s1 + s] + bwd[k][2 * s1 + s];
+                total(0).min(total(1))
+            };
+            (best(0) - best(1)).abs()
+        })
+        .collect();
+    (on_obs, margins)
 }
 
 /// Median hip-to-ankle distance over frames and sides, in pixels.
@@ -213,13 +291,23 @@ pub fn swap_frame(t: &mut Tracks, i: usize) {
 
 impl SwapCorrector for ContinuitySwap {
     fn correct(&self, tracks: &mut Tracks) -> Vec<bool> {
-        let swapped = self.detect(tracks);
+        self.correct_judged(tracks).swapped
+    }
+
+    fn correct_judged(&self, tracks: &mut Tracks) -> Labels {
+        let (swapped, margins) = self.decide(tracks);
         for (i, &s) in swapped.iter().enumerate() {
             if s {
                 swap_frame(tracks, i);
             }
         }
-        swapped
+        let fps = if tracks.fps > 0.0 { tracks.fps } else { 30.0 };
+        let price = self.swap_price * median_leg_length(tracks).unwrap_or(0.0) / fps;
+        let unsure = margins
+            .iter()
+            .map(|&m| m < self.doubt_frames * price)
+            .collect();
+        Labels { swapped, unsure }
     }
 }
 
@@ -266,6 +354,29 @@ mod tests {
         assert_eq!(swapped, expect);
         assert_eq!(t.x, clean.x);
         assert!(ContinuitySwap::default().detect(&clean).iter().all(|s| !s));
+    }
+
+    /// A clean exchange is corrected without doubt, even for one frame; a frame where the model
+    /// drew both legs half on each other is in doubt whatever labels it gets. (A longer run of
+    /// such frames keeps the model's labels by the price of exchanging them all: the doubt
+    /// is per frame.) The first frame has no evidence before it.
+    #[test]
+    fn doubt_where_continuity_cannot_tell() {
+        let clean = walking(120);
+        let mut t = clean.clone();
+        swap_frame(&mut t, 40);
+        for i in [80, 100] {
+            for k in 0..5 {
+                for v in [&mut t.x, &mut t.y] {
+                    let mean = (v[k][i] + v[5 + k][i]) / 2.0;
+                    (v[k][i], v[5 + k][i]) = (mean, mean);
+                }
+            }
+        }
+        let labels = ContinuitySwap::default().correct_judged(&mut t);
+        assert!(labels.swapped[40] && !labels.unsure[40]);
+        let unsure: Vec<usize> = (0..120).filter(|&i| labels.unsure[i]).collect();
+        assert_eq!(unsure, vec![0, 80, 100]);
     }
 
     /// Labels exchanged from just after a frame without lower legs (a dropped collapse) up to

@@ -19,16 +19,27 @@ fn timeline(t: &Tracks, r: &FrameRange) -> std::ops::Range<usize> {
 /// `[[swap]]`, after the automatic swap correction: exchanges the leg labels over each range in
 /// `t` and in `raw` (the copy before the gate, whose likelihoods the quality rules read).
 ///
-/// A person's swap is a confirmed fix, not a sign of unsure labels: `swapped` (the automatic
-/// correction's verdict per timeline frame, which `cycle_max_swapped_share` judges strides by)
-/// is cleared over the range, also where the automatic correction had exchanged the labels,
-/// since the labels there are now the person's.
-pub(crate) fn apply_swaps(c: &Corrections, t: &mut Tracks, raw: &mut Tracks, swapped: &mut [bool]) {
+/// A person's swap is a confirmed fix, not a sign of unsure labels: the automatic correction's
+/// verdicts per timeline frame (exchanged, and in doubt, which `cycle_max_swapped_share`
+/// judges strides by) are cleared over the range, also where the automatic correction had
+/// exchanged the labels, since the labels there are now the person's.
+pub(crate) fn apply_swaps(
+    c: &Corrections,
+    t: &mut Tracks,
+    raw: &mut Tracks,
+    verdicts: [&mut [bool]; 2],
+) {
     for r in &c.swap {
         for i in timeline(t, r) {
             swap_frame(t, i);
             swap_frame(raw, i);
-            swapped[i] = false;
+        }
+    }
+    for flags in verdicts {
+        for r in &c.swap {
+            for i in timeline(t, r) {
+                flags[i] = false;
+            }
         }
     }
 }
@@ -232,7 +243,10 @@ mod tests {
             swap: vec![range(10, 12)],
             ..Default::default()
         };
-        apply_swaps(&c, &mut t, &mut raw, &mut swapped);
+        let mut unsure = swapped.clone();
+        unsure[12] = false;
+        unsure[40] = true;
+        apply_swaps(&c, &mut t, &mut raw, [&mut swapped, &mut unsure]);
         for p in LEG {
             let (l, r) = (
                 t.leg_index(Side::Left, p).unwrap(),
@@ -253,8 +267,9 @@ mod tests {
         let mid = t.index("mid_hip").unwrap();
         assert_eq!(t.x[mid], clean.x[mid]);
         // A person's swap is a confirmed fix: no longer "swapped" for the cycle quality.
-        let flagged: Vec<usize> = (0..60).filter(|&i| swapped[i]).collect();
-        assert_eq!(flagged, vec![30]);
+        let flagged = |v: &[bool]| (0..60).filter(|&i| v[i]).collect::<Vec<usize>>();
+        assert_eq!(flagged(&swapped), vec![30]);
+        assert_eq!(flagged(&unsure), vec![30, 40]);
     }
 
     #[test]

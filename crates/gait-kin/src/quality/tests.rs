@@ -10,6 +10,7 @@ struct Case {
     gated: Tracks,
     lik: Vec<Vec<f64>>,
     swapped: Vec<bool>,
+    unsure: Vec<bool>,
     bouts: Vec<Bout>,
     excluded: Vec<FrameRange>,
 }
@@ -22,6 +23,7 @@ impl Case {
             gated: t.clone(),
             lik: vec![vec![0.9; n]; t.names.len()],
             swapped: vec![false; n],
+            unsure: vec![false; n],
             bouts: vec![bout(0, 179)],
             excluded: Vec::new(),
             t,
@@ -34,6 +36,7 @@ impl Case {
             gated: &self.gated,
             raw_likelihood: &self.lik,
             swapped: &self.swapped,
+            unsure: &self.unsure,
             bouts: &self.bouts,
             enforce_bouts: true,
             excluded: &self.excluded,
@@ -137,10 +140,10 @@ fn a_segment_out_of_line_is_rejected() {
 }
 
 #[test]
-fn swaps_reject_unless_allowed() {
+fn labels_in_doubt_reject_unless_allowed() {
     let mut c = Case::new();
-    c.swapped[100] = true;
-    // One corrected frame is within the default share; with none allowed it rejects.
+    c.unsure[100] = true;
+    // One frame in doubt is within the default share; with none allowed it rejects.
     let strict = KinematicsConfig {
         cycle_max_swapped_share: 0.0,
         ..Default::default()
@@ -148,7 +151,7 @@ fn swaps_reject_unless_allowed() {
     let q = c.judge(&strides(), &strict);
     assert_eq!(q[2].reasons, vec![Reason::Swap]);
     for k in 95..=105 {
-        c.swapped[k] = true;
+        c.unsure[k] = true;
     }
     assert_eq!(c.reasons(&strides()), only(2, vec![Reason::Swap]));
     let kin = KinematicsConfig {
@@ -156,7 +159,19 @@ fn swaps_reject_unless_allowed() {
         ..Default::default()
     };
     let q = c.judge(&strides(), &kin);
+    assert!(q.iter().all(|q| q.accepted) && q[2].unsure_frames == 11);
+}
+
+/// Labels exchanged and surely corrected are no reason: they are counted, not judged.
+#[test]
+fn corrected_labels_without_doubt_are_accepted() {
+    let mut c = Case::new();
+    for k in 95..=105 {
+        c.swapped[k] = true;
+    }
+    let q = c.judge(&strides(), &KinematicsConfig::default());
     assert!(q.iter().all(|q| q.accepted) && q[2].swapped_frames == 11);
+    assert_eq!(q[2].unsure_frames, 0);
 }
 
 #[test]
