@@ -280,7 +280,7 @@ fn layout_of(page: &Path, work: &Path) -> serde_json::Value {
 }
 
 fn gait_eval_chromium() -> PathBuf {
-    gait_eval::pdf::find_chromium()
+    gait_report::pdf::find_chromium()
         .expect("headless Chromium is needed: apt-get install chromium (tools/setup.sh does)")
 }
 

@@ -143,7 +143,7 @@ fn the_page_saves_corrections_that_gait_kin_reproduces() {
         .arg(&shots)
         .arg(plan.to_string())
         .env("NODE_PATH", node_modules());
-    if let Some(b) = gait_eval::pdf::find_chromium() {
+    if let Some(b) = gait_report::pdf::find_chromium() {
         node.env("CHROMIUM", b);
     }
     let out = node.output().expect("node runs");

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use gait_eval::plot::{CycleCurve, read_cycles_csv};
-use gait_eval::spatiotemporal::read_spatiotemporal;
+use gait_report::spatiotemporal::read_spatiotemporal;
 use serde_json::Value;
 
 use crate::plan::{Plan, PlannedRow, run_dir};

@@ -58,7 +58,7 @@ pub fn assess(
 ) -> Result<Checklist, ChecklistError> {
     cfg.validate()?;
     let run = RunFiles::read(dir)?;
-    let frontal_norm = norm.and_then(|n| gait_eval::frontal::norms(Some(&n.name)));
+    let frontal_norm = norm.and_then(|n| gait_eval::normative_frontal::for_sagittal(Some(&n.name)));
     let mut verdicts = Vec::new();
     for side in Side::BOTH {
         verdicts.extend(frontal_items::assess(

@@ -26,14 +26,16 @@ pub enum EvalError {
 }
 
 impl EvalError {
-    pub(crate) fn input(path: impl Into<PathBuf>, reason: impl ToString) -> Self {
+    /// A file that could not be read as what it should be.
+    pub fn input(path: impl Into<PathBuf>, reason: impl ToString) -> Self {
         Self::Input {
             path: path.into(),
             reason: reason.to_string(),
         }
     }
 
-    pub(crate) fn io(context: impl Into<String>, source: std::io::Error) -> Self {
+    /// An I/O failure, with what was being done.
+    pub fn io(context: impl Into<String>, source: std::io::Error) -> Self {
         Self::Io {
             context: context.into(),
             source,

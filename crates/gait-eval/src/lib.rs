@@ -1,38 +1,30 @@
 //! Evaluation of keypoints and joint angles against ground truth (the paper's
-//! Table 1 and failure modes), plots, the self-contained HTML report, and
-//! exports to OpenSim (`.trc`, `.mot`) and OpenPose JSON.
+//! Table 1 and failure modes), the normative data and scores (GPS, GVS, MAP), the figures, and
+//! exports to OpenSim (`.trc`, `.mot`), c3d and OpenPose JSON. The report that lays them out
+//! for a clinician is `gait-report`.
 
 mod align;
 pub mod angles;
-mod clinical;
 mod cycle_traces;
 mod error;
 mod evaluation;
 pub mod export;
 pub mod failure;
-pub mod frontal;
-mod fsutil;
-pub mod html;
+pub mod fsutil;
 mod input;
 pub mod keypoint_error;
 pub mod kin;
 pub mod names;
 pub mod normative;
 mod normative_data;
-mod normative_frontal;
+pub mod normative_frontal;
 pub mod openpose;
 mod options;
-pub mod pdf;
 pub mod plot;
-pub mod provenance;
 pub mod reliability;
-pub mod report;
 pub mod report_config;
-mod run_dir;
 pub mod scores;
-pub mod spatiotemporal;
 mod stats;
-mod subject_lines;
 mod table;
 
 pub use align::{Aligned, align, canonicalize};
@@ -50,7 +42,6 @@ pub use plot::{
     CycleCurve, FailureEntry, Figure, GraphContext, StripOptions, comparison_plot,
     consistency_plot, failure_bars, gait_graphs, map_bars, read_cycles_csv, skeleton_strip,
 };
-pub use report::{Report, Table};
 pub use scores::Scores;
 pub use stats::Stat;
 pub use table::{metrics_csv, table_markdown, write_eval};

@@ -7,9 +7,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use gait_eval::Side;
 use gait_eval::export::{RunFacts, export_run};
 use gait_eval::report_config::ExportFormat;
-use gait_eval::{Report, Side};
+use gait_report::Report;
 
 use crate::{PipelineConfig, PipelineError};
 
@@ -70,7 +71,7 @@ pub fn write_outputs(o: &OutputOptions) -> Result<Outputs, PipelineError> {
         stop_point(o.handle, "report.pdf")?;
         let t = Instant::now();
         let pdf = o.dir.join("report.pdf");
-        gait_eval::pdf::print_pdf(&browser, &out.report, &pdf)
+        gait_report::pdf::print_pdf(&browser, &out.report, &pdf)
             .map_err(|e| failed("report.pdf", e))?;
         out.seconds.insert("pdf", t.elapsed().as_secs_f64());
         out.files.push(pdf);
@@ -96,7 +97,7 @@ fn pdf_browser(
     config: &PipelineConfig,
     warnings: &mut Vec<String>,
 ) -> Result<Option<PathBuf>, PipelineError> {
-    let found = gait_eval::pdf::find_chromium();
+    let found = gait_report::pdf::find_chromium();
     match (config.report.pdf, found) {
         (Some(false), _) => Ok(None),
         (_, Some(b)) => Ok(Some(b)),

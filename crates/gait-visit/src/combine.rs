@@ -5,7 +5,7 @@
 
 use gait_checklist::{Status, Verdict};
 use gait_eval::plot::CycleCurve;
-use gait_eval::spatiotemporal::StParam;
+use gait_report::spatiotemporal::StParam;
 
 use crate::pass::Pass;
 

@@ -13,8 +13,8 @@ mod tables;
 use std::path::{Path, PathBuf};
 
 use gait_checklist::{ChecklistConfig, Side};
-use gait_eval::Report;
 use gait_eval::normative::Normative;
+use gait_report::Report;
 
 pub use combine::Source;
 pub use pass::{Pass, VIEWS};
@@ -96,11 +96,13 @@ pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSumma
         .chain(sources.iter().map(|s| format!("{}: {}", s.what, s.pass)))
         .collect();
     report.sections.push(tables::checklist_html(&checklist, o));
-    report.frontal = frontal_view.map(|view| gait_eval::frontal::FrontalReport {
+    report.frontal = frontal_view.map(|view| gait_report::frontal::FrontalReport {
         how: "the front or back pass with the most cycles of each side".into(),
         view,
         curves: frontal,
-        normative: gait_eval::frontal::norms(o.normative.as_ref().map(|n| n.name.as_str())),
+        normative: gait_eval::normative_frontal::for_sagittal(
+            o.normative.as_ref().map(|n| n.name.as_str()),
+        ),
         ..Default::default()
     });
     let present = checklist

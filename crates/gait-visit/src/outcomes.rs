@@ -4,10 +4,10 @@
 
 use std::path::Path;
 
-use gait_eval::html::{base64, escape, table};
 use gait_eval::normative::Normative;
 use gait_eval::plot::{CycleCurve, read_curves_csv, visits_plot};
 use gait_eval::{Scores, Side};
+use gait_report::html::{base64, escape, table};
 
 use crate::VisitError;
 use crate::progress::VisitRecord;

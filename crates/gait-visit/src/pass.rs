@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use gait_eval::plot::{CycleCurve, read_curves_csv, read_cycles_csv};
-use gait_eval::spatiotemporal::{StParam, read_spatiotemporal};
+use gait_report::spatiotemporal::{StParam, read_spatiotemporal};
 
 use crate::VisitError;
 

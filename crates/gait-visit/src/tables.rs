@@ -6,7 +6,7 @@ use std::path::Path;
 
 use gait_checklist::{Checklist, Verdict};
 use gait_eval::plot::CycleCurve;
-use gait_eval::spatiotemporal::StParam;
+use gait_report::spatiotemporal::StParam;
 
 use crate::{VisitError, VisitOptions};
 

@@ -181,9 +181,9 @@ fn print_pdf(config: &PipelineConfig, html: &Path, out: &Path) {
     if config.report.pdf == Some(false) {
         return;
     }
-    match gait_eval::pdf::find_chromium() {
+    match gait_report::pdf::find_chromium() {
         Some(browser) => {
-            if let Err(e) = gait_eval::pdf::print_pdf(&browser, html, &out.join("report.pdf")) {
+            if let Err(e) = gait_report::pdf::print_pdf(&browser, html, &out.join("report.pdf")) {
                 eprintln!("warning: the visit's report.pdf not written: {e}");
             }
         }

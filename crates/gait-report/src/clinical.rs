@@ -2,9 +2,9 @@
 //! the Movement Analysis Profile, spatiotemporal parameters.
 
 use crate::html::{escape, table};
-use crate::plot::{GraphContext, consistency_plot, gait_graphs, map_bars};
 use crate::report::{Report, figure};
-use crate::{EvalError, Side};
+use gait_eval::plot::{GraphContext, consistency_plot, gait_graphs, map_bars};
+use gait_eval::{EvalError, Side};
 
 /// Why the gait graphs are empty, in words a clinician can act on.
 fn no_cycles_reason(r: &Report) -> String {
@@ -85,7 +85,7 @@ impl Report {
         );
         let cell = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.1}"));
         let mut rows = Vec::new();
-        for joint in crate::normative::JOINTS {
+        for joint in gait_eval::normative::JOINTS {
             rows.push(vec![
                 format!("GVS {joint}"),
                 cell(s.gvs_of(Side::Left, joint)),

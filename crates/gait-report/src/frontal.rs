@@ -7,14 +7,14 @@ use std::path::Path;
 use serde_json::Value;
 
 use crate::html::{escape, table};
-use crate::normative::Normative;
-use crate::plot::{CycleCurve, GraphContext, frontal_graphs, read_curves_csv};
 use crate::report::figure;
-use crate::{EvalError, Side};
+use gait_eval::normative::Normative;
+use gait_eval::plot::{CycleCurve, GraphContext, frontal_graphs, read_curves_csv};
+use gait_eval::{EvalError, Side};
 
 /// The frontal normative bands that go with a sagittal set (its speed stratum).
 pub fn norms(sagittal: Option<&str>) -> Option<Normative> {
-    crate::normative_frontal::for_sagittal(sagittal)
+    gait_eval::normative_frontal::for_sagittal(sagittal)
 }
 
 /// What the frontal section shows, read from a run folder's frontal_*.csv files.
@@ -62,7 +62,7 @@ impl FrontalReport {
             curves: read_curves_csv(&cycles, "measure")?,
             scalars: rows(&dir.join("frontal_scalars.csv"))?,
             feet: rows(&dir.join("frontal_feet.csv"))?,
-            normative: crate::normative_frontal::for_sagittal(sagittal),
+            normative: gait_eval::normative_frontal::for_sagittal(sagittal),
         }))
     }
 
@@ -182,7 +182,7 @@ impl FrontalReport {
                 if v.is_empty() {
                     continue;
                 }
-                let st = crate::stats::Stat::of(&v);
+                let st = gait_eval::Stat::of(&v);
                 let (mean, sd) = (st.mean.unwrap_or(f64::NAN), st.sd.unwrap_or(f64::NAN));
                 let unit = of[0][5].as_str();
                 let unit = if unit == "leg" { "leg lengths" } else { unit };
@@ -203,7 +203,7 @@ impl FrontalReport {
         let header = ["Measure", "Side", "Mean", "SD", "n", "Unit"];
         format!(
             "<h3>Step width and circumduction</h3><p>Step width: the heels' lateral distance at each heel strike of the side; circumduction: the swing ankle's largest lateral excursion from the line between its heel strikes. Normal walking base 5-10 cm (Northwestern University Prosthetic-Orthotic Center); a wider base is the abducted gait of the amputee checklists. {} Lengths in cm when kinematics.subject_height_m is set, else in leg lengths.</p>{}",
-            escape(&crate::normative_frontal::step_width_note()),
+            escape(&gait_eval::normative_frontal::step_width_note()),
             table(&header.map(String::from), &rows)
         )
     }

@@ -5,14 +5,14 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use crate::cycle_traces::CycleTrace;
 use crate::html::{base64, escape, table};
-use crate::normative::Normative;
-use crate::plot::{CycleCurve, FailureEntry, Figure, comparison_plot, failure_bars};
-use crate::scores::Scores;
 use crate::spatiotemporal::StParam;
-use crate::table::table_markdown;
-use crate::{EvalError, Evaluation, Side};
+use gait_eval::CycleTrace;
+use gait_eval::normative::Normative;
+use gait_eval::plot::{CycleCurve, FailureEntry, Figure, comparison_plot, failure_bars};
+use gait_eval::scores::Scores;
+use gait_eval::table_markdown;
+use gait_eval::{EvalError, Evaluation, Side};
 
 /// A titled table of text cells.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -302,9 +302,9 @@ impl Report {
 
     /// Writes `report.html` into `out_dir`; returns its path.
     pub fn write(&self, out_dir: &Path) -> Result<PathBuf, EvalError> {
-        crate::fsutil::ensure_dir(out_dir)?;
+        gait_eval::fsutil::ensure_dir(out_dir)?;
         let path = out_dir.join("report.html");
-        crate::fsutil::write_atomic(&path, self.html()?.as_bytes())?;
+        gait_eval::fsutil::write_atomic(&path, self.html()?.as_bytes())?;
         Ok(path)
     }
 }

@@ -8,12 +8,13 @@ use std::time::{Duration, Instant};
 
 use gait_core::{Frame, Keypoint, Pose, PoseSequence};
 use gait_eval::{
-    CycleCurve, EvalOptions, Report, Side, StripOptions, evaluate_with_angles, read_angles_csv,
-    read_poses, skeleton_strip,
+    CycleCurve, EvalOptions, Side, StripOptions, evaluate_with_angles, read_angles_csv, read_poses,
+    skeleton_strip,
 };
+use gait_report::Report;
 
 fn chromium() -> PathBuf {
-    gait_eval::pdf::find_chromium().unwrap_or_else(|| {
+    gait_report::pdf::find_chromium().unwrap_or_else(|| {
         panic!(
             "headless Chromium not found: install the Debian package `chromium` (apt-get install -y chromium) or set CHROMIUM=/path/to/chromium"
         )
@@ -116,7 +117,8 @@ fn count(img: &image::RgbImage, rgb: [u8; 3], rows: std::ops::Range<u32>) -> usi
 
 #[test]
 fn report_loads_in_chromium_and_shows_the_plots() {
-    let fixtures = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/metrics");
+    let fixtures =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../gait-eval/tests/fixtures/metrics");
     let truth = read_poses(&fixtures.join("truth.csv"), 30.0, None).unwrap();
     let pred = read_poses(&fixtures.join("pred_openpose"), 30.0, None).unwrap();
     let ta = read_angles_csv(&fixtures.join("truth_angles.csv")).unwrap();

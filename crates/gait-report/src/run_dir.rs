@@ -5,11 +5,11 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::normative::Normative;
 use crate::report::{Report, Table};
-use crate::scores::Scores;
 use crate::spatiotemporal::read_spatiotemporal;
-use crate::{EvalError, Side};
+use gait_eval::normative::Normative;
+use gait_eval::scores::Scores;
+use gait_eval::{EvalError, Side};
 
 /// Files of the run folder shown as tables, with their titles.
 const TABLES: [(&str, &str); 3] = [
@@ -59,11 +59,11 @@ impl Report {
         r.frontal = crate::frontal::FrontalReport::read(dir, r.manifest.as_ref(), sagittal_norm)?;
         let cycles = dir.join("cycles.csv");
         if cycles.exists() {
-            r.cycles = crate::plot::read_cycles_csv(&cycles)?;
+            r.cycles = gait_eval::plot::read_cycles_csv(&cycles)?;
         }
         let all = dir.join("cycles_all.csv");
         if all.exists() {
-            r.traces = crate::cycle_traces::read_cycles_all_csv(&all)?;
+            r.traces = gait_eval::read_cycles_all_csv(&all)?;
         }
         let st = dir.join("spatiotemporal.csv");
         if st.exists() {
@@ -103,7 +103,7 @@ impl Report {
     }
 }
 
-fn strip(dir: &Path, r: &Report) -> Result<Option<crate::Figure>, EvalError> {
+fn strip(dir: &Path, r: &Report) -> Result<Option<gait_eval::Figure>, EvalError> {
     let kp = dir.join("keypoints.csv");
     if !kp.exists() {
         return Ok(None);
@@ -114,11 +114,11 @@ fn strip(dir: &Path, r: &Report) -> Result<Option<crate::Figure>, EvalError> {
         .and_then(|m| m.get("fps"))
         .and_then(Value::as_f64)
         .unwrap_or(30.0);
-    let seq = crate::read_poses(&kp, fps, None)?;
+    let seq = gait_eval::read_poses(&kp, fps, None)?;
     if seq.is_empty() {
         return Ok(None);
     }
-    crate::plot::skeleton_strip(&seq, &[], &crate::plot::StripOptions::default()).map(Some)
+    gait_eval::plot::skeleton_strip(&seq, &[], &gait_eval::plot::StripOptions::default()).map(Some)
 }
 
 /// The corrections a person applied (run.json's kinematics summary), as a table.

@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
-use crate::EvalError;
-use crate::names::Side;
-use crate::normative::{NormParam, Normative};
 use crate::report::Table;
+use gait_eval::EvalError;
+use gait_eval::Side;
+use gait_eval::normative::{NormParam, Normative};
 
 /// One row of gait-kin's `spatiotemporal.csv`.
 #[derive(Debug, Clone, PartialEq)]
@@ -180,7 +180,7 @@ pub fn table(rows: &[StParam], norm: Option<&Normative>, prosthetic: Option<Side
             },
         };
         let cell = |p: Option<&StParam>| p.map_or("—".to_string(), mean_sd);
-        let mdc = crate::reliability::cell(param, &unit);
+        let mdc = gait_eval::reliability::cell(param, &unit);
         out.push(vec![
             label(param),
             unit,

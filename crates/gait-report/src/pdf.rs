@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::EvalError;
+use gait_eval::EvalError;
 
 /// Browsers tried on the PATH, in order (`$CHROMIUM` first when set).
 const NAMES: [&str; 4] = ["chromium", "chromium-browser", "google-chrome", "chrome"];
