@@ -43,6 +43,7 @@ pub mod peaks;
 pub mod quality;
 pub mod smooth;
 pub mod spatiotemporal;
+pub mod spikes;
 pub mod spline;
 mod steps;
 pub mod swap;
@@ -458,6 +459,17 @@ fn clean(
     };
     for i in (0..n).filter(|&i| swapped[i]) {
         swap::swap_frame(&mut raw, i);
+    }
+    // A knee or foot the model misplaced for one frame moves the events once filtered; judged
+    // on the corrected labels (an exchanged frame is a jump of both legs, not of one point),
+    // before a person's swaps (whose range edges are jumps by design).
+    if !view.is_frontal() {
+        let spikes = spikes::SpikeRule::default().drop(&mut t);
+        if spikes > 0 {
+            warnings.push(format!(
+                "{spikes} single-frame jumps of a knee or foot keypoint dropped (bridged)"
+            ));
+        }
     }
     // A person's swaps come after the automatic correction, which therefore cannot undo them;
     // their frames stop counting as swapped (a confirmed fix, see `apply_swaps`).
