@@ -98,6 +98,7 @@ fn item_of(case: &str) -> &'static str {
         "short_stance" => "uneven_stance_time",
         "vaulting" => "vaulting",
         "trunk_flexion" => "excessive_trunk_flexion",
+        "foot_slap" => "foot_slap",
         other => panic!("unknown case {other}"),
     }
 }
@@ -109,8 +110,9 @@ fn bilateral(case: &str) -> bool {
 
 /// The larger size of each deviation (the stance's and the trunk flexion's only size), which
 /// must be found.
-const REQUIRED: [&str; 8] = [
+const REQUIRED: [&str; 9] = [
     "trunk_flexion_15",
+    "foot_slap_30",
     "trunk_lean_10",
     "wide_base_10",
     "circumduction_10",
