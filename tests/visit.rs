@@ -114,6 +114,7 @@ fn item_of(case: &str) -> &'static str {
         "vaulting" => "vaulting",
         "trunk_flexion" => "excessive_trunk_flexion",
         "foot_slap" => "foot_slap",
+        "medial_whip" => "medial_lateral_whip",
         other => panic!("unknown case {other}"),
     }
 }
@@ -125,9 +126,10 @@ fn bilateral(case: &str) -> bool {
 
 /// The larger size of each deviation (the stance's and the trunk flexion's only size), which
 /// must be found.
-const REQUIRED: [&str; 9] = [
+const REQUIRED: [&str; 10] = [
     "trunk_flexion_15",
     "foot_slap_30",
+    "medial_whip_8",
     "trunk_lean_10",
     "wide_base_10",
     "circumduction_10",
@@ -416,7 +418,8 @@ fn noisy_copy(case: &Path, to: &Path, seed: u64) {
 }
 
 /// The larger planted deviations as 30 fps videos with pose-model jitter (3 seeds): each is found
-/// on the right in every seed and nothing on the left; what else the jitter adds on the right
+/// on the right in every seed (a 10 % shorter stance and the whip in 2 of 3) and nothing on the
+/// left; what else the jitter adds on the right
 /// (hip hiking on the Parkinson's narrow hips, circumduction) is printed (BENCHMARKS.md).
 #[test]
 fn planted_deviations_under_pose_model_noise() {
@@ -448,7 +451,7 @@ fn planted_deviations_under_pose_model_noise() {
                     "{trial} {case} seed {}: on the left {left:?}",
                     seed + 1
                 );
-                if case != "none" && case != "short_stance_10" {
+                if !["none", "short_stance_10", "medial_whip_8"].contains(&case) {
                     let item = format!("{} (right)", item_of(case));
                     assert!(
                         f.contains(&item),
@@ -460,7 +463,10 @@ fn planted_deviations_under_pose_model_noise() {
             // A stance 10 % shorter is 2 frames at 30 fps, over the 2-3 strides a side of these
             // trials; with the jitter the swing:stance ratio of the unmodified walk already
             // spreads over 0.93-1.08 (BENCHMARKS.md): found in 2 of 3 seeds is what holds.
-            if case == "short_stance_10" {
+            // A whip lives in the 6-7 frames (at 30 fps) around a toe-off that is itself found on
+            // jittered keypoints, and is measured against the heel's median at foot flat: the
+            // Parkinson's walker's 8 cm whip was found in 2 of 3 seeds (Fukuchi 3 of 3).
+            if case == "short_stance_10" || case == "medial_whip_8" {
                 let item = format!("{} (right)", item_of(case));
                 let seen = found.iter().filter(|f| f.contains(&item)).count();
                 assert!(seen >= 2, "{trial} {case}: {item} in {seen} of 3 seeds");

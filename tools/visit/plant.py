@@ -31,7 +31,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "frontal"))
 import derive_frontal as df  # noqa: E402
 from trunk import trunk_flexion, trunk_flexion_deg, trunk_lean  # noqa: E402
-from foot import LOADING_SHARE_OF_STANCE, foot_pitch_deg, foot_slap, loading_weights  # noqa: E402
+from foot import (foot_pitch_deg, foot_slap, loading_weights, weight_spans, whip, whip_cm,  # noqa: E402
+                  whip_weights)
 
 REPO = Path(__file__).resolve().parents[2]
 SDIST = ("gaitkit==1.5.0", "gaitkit-1.5.0.tar.gz",
@@ -66,6 +67,7 @@ CASES = {
     "short_stance_10": ("short_stance", 10, "percent"),
     "trunk_flexion_15": ("trunk_flexion", 15, "deg"),
     "foot_slap_15": ("foot_slap", 15, "deg"), "foot_slap_30": ("foot_slap", 30, "deg"),
+    "medial_whip_3": ("medial_whip", 3, "cm"), "medial_whip_8": ("medial_whip", 8, "cm"),
 }
 
 
@@ -423,6 +425,8 @@ def measure(dev, lms, ph, fps, with_trunk):
             out[s] = mean(lms[i][f"{o}_heel"][1] / 10 for i in full(sw[s]))
         elif dev == "knee_flexed":
             out[s] = mean(knee_flexion(lms[i], s) for i in full(st[s]))
+        elif dev == "medial_whip":
+            out[s] = whip_cm(lms, s, ph[s][0]) * (1.0 if s == "right" else -1.0) * LATERAL
         elif dev == "foot_slap":
             # the most toe-down foot in each loading response, averaged over the stances
             w = loading_weights(len(lms), ph[s][0])
@@ -441,7 +445,8 @@ UNITS = {"trunk_lean": "deg toward the side, in its stance", "wide_base": "cm he
          "vaulting": "cm height of the standing heel while it swings", "knee_flexed": "deg knee flexion in its stance",
          "short_stance": "s heel strike to toe lift",
          "trunk_flexion": "deg forward from the vertical, in its stance",
-         "foot_slap": "deg toe-down foot, most in loading response"}
+         "foot_slap": "deg toe-down foot, most in loading response",
+         "medial_whip": "cm heel shift against the toe at toe-off, + lateral"}
 
 
 # ---------------------------------------------------------------- main
@@ -517,8 +522,13 @@ def plant_trial(trial, d, out_root):
             spans = clipped(stances, n)
             note = f"thigh and shank lengthened by at most {100 * worst:.1f} %"
         elif dev == "foot_slap":
-            foot_slap(lms, PLANTED, loading_weights(n, stances), size, 1.0 if pelvis_x[-1] > pelvis_x[0] else -1.0)
-            spans = [[max(a, 0), min(int(a + LOADING_SHARE_OF_STANCE * (b - a)), n - 1)] for a, b in stances if b >= 0 and a <= n - 1]
+            w = loading_weights(n, stances)
+            foot_slap(lms, PLANTED, w, size, 1.0 if pelvis_x[-1] > pelvis_x[0] else -1.0)
+            spans = weight_spans(w)
+        elif dev == "medial_whip":
+            w = whip_weights(n, stances)
+            whip(lms, PLANTED, w, -LATERAL * size * 10)
+            spans = weight_spans(w)
         elif dev == "short_stance":
             spans, new_to, straight = short_stance(frames, lms, stances, swings, to, size / 100)
             moved = [[t, round(nt, 1)] for t, nt in zip([t for t in to if any(a <= t <= b for a, b in spans)], new_to)]
