@@ -115,6 +115,7 @@ fn item_of(case: &str) -> &'static str {
         "trunk_flexion" => "excessive_trunk_flexion",
         "foot_slap" => "foot_slap",
         "medial_whip" => "medial_lateral_whip",
+        "terminal_impact" => "terminal_swing_impact",
         other => panic!("unknown case {other}"),
     }
 }
@@ -125,7 +126,8 @@ fn bilateral(case: &str) -> bool {
 }
 
 /// The larger size of each deviation (the stance's and the trunk flexion's only size), which
-/// must be found.
+/// must be found. Terminal swing impact is planted and printed but not required: the healthy
+/// walk's knee thrown 4 times as fast into extension reads 1.9, under the 2.0 (BENCHMARKS.md).
 const REQUIRED: [&str; 10] = [
     "trunk_flexion_15",
     "foot_slap_30",

@@ -33,6 +33,7 @@ import derive_frontal as df  # noqa: E402
 from trunk import trunk_flexion, trunk_flexion_deg, trunk_lean  # noqa: E402
 from foot import (foot_pitch_deg, foot_slap, loading_weights, weight_spans, whip, whip_cm,  # noqa: E402
                   whip_weights)
+from knee import peak_extension_speed, terminal_impact  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 SDIST = ("gaitkit==1.5.0", "gaitkit-1.5.0.tar.gz",
@@ -68,6 +69,7 @@ CASES = {
     "trunk_flexion_15": ("trunk_flexion", 15, "deg"),
     "foot_slap_15": ("foot_slap", 15, "deg"), "foot_slap_30": ("foot_slap", 30, "deg"),
     "medial_whip_3": ("medial_whip", 3, "cm"), "medial_whip_8": ("medial_whip", 8, "cm"),
+    "terminal_impact_2": ("terminal_impact", 2, "x"), "terminal_impact_4": ("terminal_impact", 4, "x"),
 }
 
 
@@ -425,6 +427,8 @@ def measure(dev, lms, ph, fps, with_trunk):
             out[s] = mean(lms[i][f"{o}_heel"][1] / 10 for i in full(sw[s]))
         elif dev == "knee_flexed":
             out[s] = mean(knee_flexion(lms[i], s) for i in full(st[s]))
+        elif dev == "terminal_impact":
+            out[s] = peak_extension_speed(lms, s, ph[s][1], fps)
         elif dev == "medial_whip":
             out[s] = whip_cm(lms, s, ph[s][0]) * (1.0 if s == "right" else -1.0) * LATERAL
         elif dev == "foot_slap":
@@ -446,7 +450,8 @@ UNITS = {"trunk_lean": "deg toward the side, in its stance", "wide_base": "cm he
          "short_stance": "s heel strike to toe lift",
          "trunk_flexion": "deg forward from the vertical, in its stance",
          "foot_slap": "deg toe-down foot, most in loading response",
-         "medial_whip": "cm heel shift against the toe at toe-off, + lateral"}
+         "medial_whip": "cm heel shift against the toe at toe-off, + lateral",
+         "terminal_impact": "deg/s fastest knee extension in its swing"}
 
 
 # ---------------------------------------------------------------- main
@@ -525,6 +530,8 @@ def plant_trial(trial, d, out_root):
             w = loading_weights(n, stances)
             foot_slap(lms, PLANTED, w, size, 1.0 if pelvis_x[-1] > pelvis_x[0] else -1.0)
             spans = weight_spans(w)
+        elif dev == "terminal_impact":
+            spans = terminal_impact(lms, PLANTED, swings, size)
         elif dev == "medial_whip":
             w = whip_weights(n, stances)
             whip(lms, PLANTED, w, -LATERAL * size * 10)
