@@ -109,7 +109,8 @@ impl Checklist {
             };
             let verdict = match v.status {
                 Status::Present => "<b>present</b>".to_string(),
-                Status::Absent => "absent".into(),
+                Status::Absent if v.reason.is_empty() => "absent".into(),
+                Status::Absent => format!("absent ({})", escape(&v.reason)),
                 Status::NotAssessable => format!("not assessable: {}", escape(&v.reason)),
             };
             let value = match (num(v.value), num(v.spread)) {
