@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use crate::bouts::{self, Bout};
+use crate::clean::Cleaned;
 use crate::config::{KinematicsConfig, PostprocessConfig, Side};
 use crate::corrections::{self, Corrections};
 use crate::direction::Directions;
@@ -12,7 +13,7 @@ use crate::frontal;
 use crate::margins::EventMargin;
 use crate::tracks::Tracks;
 use crate::view::View;
-use crate::{Cleaned, KinError, Steps};
+use crate::{KinError, Steps};
 
 /// The walking bouts: a front or back view's from the body's growth, a side view's from the
 /// walk across the image.

@@ -24,6 +24,7 @@ pub mod angles;
 pub mod bouts;
 pub mod butterworth;
 mod chain;
+mod clean;
 pub mod collapse;
 pub mod config;
 pub mod corrections;
@@ -253,7 +254,7 @@ fn run_chain(
     let no_corrections = Corrections::default();
     let fixes = corr.as_ref().map_or(&no_corrections, |g| &g.corrections);
     let view = decide_view(seq, steps, kin, &mut warnings);
-    let c = clean(seq, post, steps, fixes, view.view, &mut warnings);
+    let c = clean::clean(seq, post, steps, fixes, view.view, &mut warnings);
     let (t, n) = (&c.clean, c.clean.len());
     let frontal_scale = view.view.is_frontal().then(|| frontal::Scale::measure(t));
     let dirs = match frontal_scale {
@@ -378,164 +379,6 @@ fn decide_view(
     let mut t = Tracks::from_sequence(seq);
     steps.gate.apply(&mut t);
     view::decide(&t, kin.view, warnings)
-}
-
-/// The keypoints after cleaning, plus what the quality rules need from before it.
-struct Cleaned {
-    /// Gated, swap-corrected, gap-filled and smoothed.
-    clean: Tracks,
-    /// Gated and swap-corrected, before gap filling: what the pose model really gave.
-    gated: Tracks,
-    /// The model's likelihoods before the gate, leg labels swap-corrected.
-    raw_likelihood: Vec<Vec<f64>>,
-    /// Frames the automatic swap correction exchanged, outside the ranges a person swapped.
-    swapped: Vec<bool>,
-    /// Frames whose leg labels are in doubt, outside the ranges a person swapped.
-    unsure: Vec<bool>,
-    /// Frames whose lower legs were dropped as collapsed.
-    collapsed: usize,
-}
-
-/// Likelihood gate -> collapsed frames dropped -> swap correction -> the corrections' swaps and
-/// keypoints -> gap filling -> smoothing (collapsed frames filled after it).
-fn clean(
-    seq: &PoseSequence,
-    post: &PostprocessConfig,
-    steps: &Steps,
-    fixes: &Corrections,
-    view: View,
-    warnings: &mut Vec<String>,
-) -> Cleaned {
-    let fps = seq.fps;
-    let mut t = Tracks::from_sequence(seq);
-    let mut raw = t.clone();
-    let n = t.len();
-    if n == 0 {
-        warnings.push("no frames in the input".into());
-    }
-    steps.gate.apply(&mut t);
-    if n > 0 && t.x.iter().all(|x| x.iter().all(|v| !v.is_finite())) {
-        warnings.push(format!(
-            "no keypoint with likelihood >= {} in any frame",
-            post.likelihood_threshold
-        ));
-    }
-
-    // Frames where the pose left the subject's path for a moment (someone else drawn while
-    // the subject passes them) are not the subject: dropped whole, bridged by the gap filler.
-    glitch::drop_glitches(&mut t, warnings);
-
-    // Frames with both legs drawn on one carry no labels and mislead the swap correction; they
-    // are part of the label cleaning and go with it.
-    // In a front or back view the legs are apart and the hips say which is which: neither
-    // the collapse rule nor the side view's continuity swap applies.
-    let collapsed = match steps.swap {
-        Some(_) if !view.is_frontal() => collapse::CollapseRule::default().find(&t),
-        _ => vec![false; n],
-    };
-    let collapsed_frames = collapsed.iter().filter(|&&c| c).count();
-    if collapsed_frames > 0 {
-        collapse::drop_frames(&mut t, &collapsed);
-        warnings.push(format!(
-            "lower-leg keypoints dropped in {collapsed_frames} frames where both legs were drawn on one"
-        ));
-    }
-    let swap::Labels {
-        mut swapped,
-        mut unsure,
-    } = match steps.swap {
-        _ if view.is_frontal() => {
-            let swapped = frontal::labels::fix(&mut t, view);
-            swap::Labels {
-                unsure: swapped.clone(),
-                swapped,
-            }
-        }
-        Some(s) => s.correct_judged(&mut t),
-        None => swap::Labels {
-            swapped: vec![false; n],
-            unsure: vec![false; n],
-        },
-    };
-    for i in (0..n).filter(|&i| swapped[i]) {
-        swap::swap_frame(&mut raw, i);
-    }
-    // A knee or foot the model misplaced for one frame moves the events once filtered; judged
-    // on the corrected labels (an exchanged frame is a jump of both legs, not of one point),
-    // before a person's swaps (whose range edges are jumps by design).
-    if !view.is_frontal() {
-        let spikes = spikes::SpikeRule::default().drop(&mut t);
-        if spikes > 0 {
-            warnings.push(format!(
-                "{spikes} single-frame jumps of a knee or foot keypoint dropped (bridged)"
-            ));
-        }
-    }
-    // A person's swaps come after the automatic correction, which therefore cannot undo them;
-    // their frames stop counting as swapped (a confirmed fix, see `apply_swaps`).
-    corrections::apply_swaps(fixes, &mut t, &mut raw, [&mut swapped, &mut unsure]);
-    let swapped_frames = swapped.iter().filter(|&&s| s).count();
-    if swapped_frames > 0 {
-        warnings.push(format!(
-            "left/right leg labels corrected in {swapped_frames} frames"
-        ));
-    }
-    // A person's keypoints are in the labels they see in the output, so they come after both
-    // label corrections; before gap filling and smoothing, as if the pose model had given them.
-    corrections::apply_keypoints(fixes, &mut t, &mut raw);
-    let gated = t.clone();
-
-    let max_gap = post.max_gap(fps);
-    for j in 0..t.names.len() {
-        let present = t.x[j].iter().any(|v| v.is_finite());
-        if !present {
-            continue;
-        }
-        let mut left = Vec::new();
-        for coord in [&mut t.x[j], &mut t.y[j]] {
-            left = steps.gap_filler.fill(coord, max_gap);
-        }
-        // Gaps matter to the reader only where the kinematics use the point;
-        // a model's extra native keypoints (hands, face) are filled silently.
-        let used = gait_core::keypoint::canonical_index(&t.names[j]).is_some();
-        for (start, len) in left.into_iter().filter(|_| used) {
-            warnings.push(format!(
-                "gap of {len} frames in {} (from frame {}) left empty (longer than {max_gap})",
-                t.names[j],
-                t.first_frame + start
-            ));
-        }
-        // Filled samples carry no model likelihood; mark them as at the threshold.
-        for i in 0..n {
-            if t.x[j][i].is_finite() && t.likelihood[j][i] < post.likelihood_threshold {
-                t.likelihood[j][i] = post.likelihood_threshold;
-            }
-        }
-        // A collapsed frame is filled only after smoothing, from the smoothed frames around it:
-        // filtered with the rest, the filled guess would spread over the well-seen frames
-        // either side. Collapses come with fast movement (motion blur; both inside the sample's
-        // walk are at a foot leaving the ground), and the guess then moves its onset into them.
-        let late: Vec<usize> = (0..n)
-            .filter(|&i| collapsed[i] && gated.x[j][i].is_nan() && t.x[j][i].is_finite())
-            .collect();
-        for coord in [&mut t.x[j], &mut t.y[j]] {
-            for &i in &late {
-                coord[i] = f64::NAN;
-            }
-            smooth::smooth_segments(steps.smoother, coord, fps);
-            if !late.is_empty() {
-                steps.gap_filler.fill(coord, max_gap);
-            }
-        }
-    }
-    Cleaned {
-        clean: t,
-        gated,
-        raw_likelihood: raw.likelihood,
-        swapped,
-        unsure,
-        collapsed: collapsed_frames,
-    }
 }
 
 /// Per-frame direction, with warnings for front views and no direction at all.
