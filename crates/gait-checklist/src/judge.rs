@@ -67,7 +67,7 @@ pub fn judge(
     let hits: Vec<&Sample> = samples.iter().filter(|s| t.passed(s.value)).collect();
     // Present when the side's cycles show it consistently: the mean lies past the threshold by
     // at least its standard error. One deviant cycle among two or three (a pose model's foot
-    // misplaced in one stride) moved the mean past the threshold in 11 of 15 re-encodings of
+    // misplaced in one stride) moved the mean past the threshold in 10-12 of 15 re-encodings of
     // the bundled sample's healthy walk (foot slap, vaulting); none had its mean past it by a
     // standard error, while the planted deviations are past it by several.
     let se = if values.len() > 1 {

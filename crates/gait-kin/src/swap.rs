@@ -74,6 +74,12 @@ fn leg_pairs(t: &Tracks) -> Vec<[usize; 2]> {
 }
 
 impl ContinuitySwap {
+    /// `swap_price` for one frame of `t`, in pixels of continuity cost.
+    fn frame_price(&self, t: &Tracks) -> f64 {
+        let fps = if t.fps > 0.0 { t.fps } else { 30.0 };
+        self.swap_price * median_leg_length(t).unwrap_or(0.0) / fps
+    }
+
     /// Cost of labelling observed frame `a` with `s`, given labels `s1` at the previous observed
     /// frame `b` and `s2` at the one before, `c`; `None` when no keypoint links `a` to `b`.
     /// Frames need not be adjacent: the constant-velocity prediction is scaled by the frame
@@ -153,7 +159,7 @@ impl ContinuitySwap {
         }
         let max_link = ((self.max_link_s * fps).round() as usize).max(1);
         let near = |x: usize, y: usize| x - y <= max_link;
-        let price = self.swap_price * median_leg_length(t).unwrap_or(0.0) / fps;
+        let price = self.frame_price(t);
         // steps[k][4 * s2 + 2 * s1 + s]: the cost of the step into observed frame k with labels
         // s there, s1 at k - 1 and s2 at k - 2 (1 = exchanged).
         let steps: Vec<[f64; 8]> = (0..m)
@@ -301,8 +307,7 @@ impl SwapCorrector for ContinuitySwap {
                 swap_frame(tracks, i);
             }
         }
-        let fps = if tracks.fps > 0.0 { tracks.fps } else { 30.0 };
-        let price = self.swap_price * median_leg_length(tracks).unwrap_or(0.0) / fps;
+        let price = self.frame_price(tracks);
         let unsure = margins
             .iter()
             .map(|&m| m < self.doubt_frames * price)
