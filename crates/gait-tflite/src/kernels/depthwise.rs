@@ -47,7 +47,8 @@ impl Depthwise {
             &wide[..]
         };
         let (oh, ow) = self.out_size;
-        let mut out = vec![0f32; oh * ow * oc];
+        // Appended pixel by pixel, not zeroed first (a pass over memory per layer).
+        let mut out = Vec::with_capacity(oh * ow * oc);
         #[cfg(target_arch = "x86_64")]
         if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
             // SAFETY: the CPU has the features the function is compiled for.
@@ -60,28 +61,47 @@ impl Depthwise {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn pixels_avx2(&self, x: &[f32], h: usize, w: usize, c: usize, out: &mut [f32]) {
+    unsafe fn pixels_avx2(&self, x: &[f32], h: usize, w: usize, c: usize, out: &mut Vec<f32>) {
         self.pixels(x, h, w, c, out)
     }
 
     #[inline(always)]
-    fn pixels(&self, x: &[f32], h: usize, w: usize, c: usize, out: &mut [f32]) {
+    fn pixels(&self, x: &[f32], h: usize, w: usize, c: usize, out: &mut Vec<f32>) {
         let (kh, kw) = self.kernel;
         let (oh, ow) = self.out_size;
         let (sy, sx) = self.stride;
         let (dy, dx) = self.dilation;
+        // Columns whose taps all fall inside the image share one tap list per
+        // row, offset by the column: building a list per pixel cost as much as
+        // the arithmetic on BlazePose's narrow early layers.
+        let inside = |ox: usize| ox * sx >= self.pad.1 && ox * sx - self.pad.1 + (kw - 1) * dx < w;
         // (input offset, weight offset) of the taps inside the image.
+        let mut row_taps: Vec<(usize, usize)> = Vec::with_capacity(kh * kw);
         let mut taps: Vec<(usize, usize)> = Vec::with_capacity(kh * kw);
-        let mut pixels = out.chunks_exact_mut(c);
+        let (wt, bias) = (&self.weights[..], &self.bias[..]);
+        let mut dst = vec![0f32; c];
+        let mut emit = |dst: &mut [f32]| {
+            act::apply(self.act, dst);
+            out.extend_from_slice(dst);
+        };
         for oy in 0..oh {
+            let rows = (0..kh).filter_map(|ky| {
+                let iy = (oy * sy + ky * dy).wrapping_sub(self.pad.0);
+                (iy < h).then_some((ky, iy))
+            });
+            row_taps.clear();
+            for (ky, iy) in rows.clone() {
+                row_taps.extend((0..kw).map(|kx| ((iy * w + kx * dx) * c, (ky * kw + kx) * c)));
+            }
             for ox in 0..ow {
-                let Some(dst) = pixels.next() else { return };
+                if inside(ox) {
+                    let base = (ox * sx - self.pad.1) * c;
+                    pixel(&mut dst, x, wt, bias, &row_taps, base);
+                    emit(&mut dst);
+                    continue;
+                }
                 taps.clear();
-                for ky in 0..kh {
-                    let iy = (oy * sy + ky * dy).wrapping_sub(self.pad.0);
-                    if iy >= h {
-                        continue;
-                    }
+                for (ky, iy) in rows.clone() {
                     for kx in 0..kw {
                         let ix = (ox * sx + kx * dx).wrapping_sub(self.pad.1);
                         if ix < w {
@@ -89,18 +109,31 @@ impl Depthwise {
                         }
                     }
                 }
-                pixel(dst, x, &self.weights, &self.bias, &taps);
-                act::apply(self.act, dst);
+                pixel(&mut dst, x, wt, bias, &taps, 0);
+                emit(&mut dst);
             }
         }
     }
 }
 
-/// One output pixel over all channels.
+/// One output pixel over all channels into `dst`; the taps' input offsets
+/// are relative to `base`.
 #[inline(always)]
-fn pixel(dst: &mut [f32], x: &[f32], wt: &[f32], bias: &[f32], taps: &[(usize, usize)]) {
+fn pixel(
+    dst: &mut [f32],
+    x: &[f32],
+    wt: &[f32],
+    bias: &[f32],
+    taps: &[(usize, usize)],
+    base: usize,
+) {
     let c = dst.len();
+    let x = &x[base..];
     let mut c0 = 0;
+    while c0 + 32 <= c {
+        block::<32>(&mut dst[c0..c0 + 32], x, wt, &bias[c0..c0 + 32], taps, c0);
+        c0 += 32;
+    }
     while c0 + 16 <= c {
         block::<16>(&mut dst[c0..c0 + 16], x, wt, &bias[c0..c0 + 16], taps, c0);
         c0 += 16;
