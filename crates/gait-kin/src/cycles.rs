@@ -15,6 +15,28 @@ pub struct Stride {
     pub side: Side,
     pub start: usize,
     pub end: usize,
+    /// The two heel strikes' sub-frame times (input frames), where the detector has them.
+    /// The curves are normalised on these: a stride that starts half a frame later has
+    /// its 0 % half a frame later, as its duration already has.
+    #[serde(skip)]
+    pub at: Option<[f64; 2]>,
+}
+
+impl Stride {
+    /// A stride between two heel strikes placed on frames.
+    pub fn on_frames(side: Side, start: usize, end: usize) -> Self {
+        Self {
+            side,
+            start,
+            end,
+            at: None,
+        }
+    }
+
+    /// The heel strikes' times in input frames, sub-frame where known.
+    pub fn span(&self) -> [f64; 2] {
+        self.at.unwrap_or([self.start as f64, self.end as f64])
+    }
 }
 
 /// Mean and SD curves of one joint of one side over its complete cycles (101 points each).
@@ -33,18 +55,17 @@ pub struct CycleCurve {
 pub fn strides(events: &[Event], fps: f64, min_s: f64, max_s: f64) -> Vec<Stride> {
     let mut out = Vec::new();
     for side in Side::BOTH {
-        let hs: Vec<usize> = events
+        let hs: Vec<&Event> = events
             .iter()
             .filter(|e| e.side == side && e.event == EventKind::HeelStrike)
-            .map(|e| e.frame)
             .collect();
         for w in hs.windows(2) {
-            let dur = (w[1] - w[0]) as f64 / fps;
+            let dur = (w[1].frame - w[0].frame) as f64 / fps;
             if dur >= min_s && dur <= max_s {
+                let sub = w[0].at.is_some() || w[1].at.is_some();
                 out.push(Stride {
-                    side,
-                    start: w[0],
-                    end: w[1],
+                    at: sub.then(|| [w[0].time(), w[1].time()]),
+                    ..Stride::on_frames(side, w[0].frame, w[1].frame)
                 });
             }
         }
@@ -52,27 +73,35 @@ pub fn strides(events: &[Event], fps: f64, min_s: f64, max_s: f64) -> Vec<Stride
     out
 }
 
-/// `series` (indexed from `first_frame`) resampled linearly at 101 points over the stride;
-/// `None` when any needed sample is missing.
+/// `series` (indexed from `first_frame`) resampled linearly at 101 points over the stride,
+/// from its heel strikes' sub-frame times where those have their samples, else from its
+/// frames; `None` when any needed sample is missing.
 pub fn resample(series: &[f64], first_frame: usize, s: &Stride) -> Option<Vec<f64>> {
-    let (a, b) = (
-        s.start.checked_sub(first_frame)?,
-        s.end.checked_sub(first_frame)?,
-    );
-    if b >= series.len() || b <= a {
+    let on_frames = [s.start as f64, s.end as f64];
+    let span = s.span();
+    if span != on_frames
+        && let Some(v) = resample_span(series, first_frame, span)
+    {
+        return Some(v);
+    }
+    resample_span(series, first_frame, on_frames)
+}
+
+/// `series` at 101 points from input frame time `span[0]` to `span[1]`.
+fn resample_span(series: &[f64], first_frame: usize, span: [f64; 2]) -> Option<Vec<f64>> {
+    let (a, b) = (span[0] - first_frame as f64, span[1] - first_frame as f64);
+    if !(a >= 0.0 && b > a && b.ceil() < series.len() as f64) {
         return None;
     }
-    let span = (b - a) as f64;
     (0..=100)
         .map(|p| {
-            let pos = a as f64 + span * p as f64 / 100.0;
+            let pos = a + (b - a) * p as f64 / 100.0;
             let i = pos.floor() as usize;
             let f = pos - i as f64;
-            let lo = series[i];
             let v = if f == 0.0 {
-                lo
+                series[i]
             } else {
-                lo * (1.0 - f) + series[(i + 1).min(b)] * f
+                series[i] * (1.0 - f) + series[i + 1] * f
             };
             v.is_finite().then_some(v)
         })
@@ -197,11 +226,7 @@ mod tests {
         let s = strides(&ev, 30.0, 0.5, 3.0);
         assert_eq!(
             s,
-            vec![Stride {
-                side: Side::Left,
-                start: 10,
-                end: 40
-            }]
+            vec![Stride::on_frames(Side::Left, 10, 40)]
         );
         let series: Vec<f64> = (0..50).map(|i| i as f64).collect();
         let r = resample(&series, 5, &s[0]).unwrap();
@@ -209,5 +234,26 @@ mod tests {
         let mut gap = series.clone();
         gap[20] = f64::NAN;
         assert!(resample(&gap, 5, &s[0]).is_none());
+    }
+
+    #[test]
+    fn curves_start_at_the_heel_strikes_sub_frame_times() {
+        let hs = |frame, at| Event {
+            at: Some(at),
+            ..Event::on_frame(Side::Left, EventKind::HeelStrike, frame)
+        };
+        let s = strides(&[hs(10, 10.4), hs(40, 39.6)], 30.0, 0.5, 3.0);
+        assert_eq!(s[0].span(), [10.4, 39.6]);
+        let series: Vec<f64> = (0..50).map(|i| i as f64).collect();
+        let r = resample(&series, 5, &s[0]).unwrap();
+        assert!((r[0] - 5.4).abs() < 1e-9 && (r[100] - 34.6).abs() < 1e-9, "{r:?}");
+        // A last heel strike after the last sample: the frames' span instead.
+        let short: Vec<f64> = (0..36).map(|i| i as f64).collect();
+        let late = Stride {
+            at: Some([10.4, 40.3]),
+            ..s[0]
+        };
+        let r = resample(&short, 5, &late).unwrap();
+        assert_eq!((r[0], r[100]), (5.0, 35.0));
     }
 }

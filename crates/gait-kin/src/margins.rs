@@ -123,6 +123,7 @@ mod tests {
             swapped_frames: 0,
             unsure_frames: 0,
             bout: Some(0),
+            at: None,
         };
         let m = cycles(&[q], &kin);
         assert_eq!(m.len(), 1);

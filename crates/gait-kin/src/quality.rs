@@ -122,14 +122,16 @@ pub struct CycleQuality {
     pub unsure_frames: usize,
     /// Index into the bouts of the bout holding the whole stride.
     pub bout: Option<usize>,
+    /// The heel strikes' sub-frame times ([`Stride::at`]).
+    #[serde(skip)]
+    pub at: Option<[f64; 2]>,
 }
 
 impl CycleQuality {
     pub fn stride(&self) -> Stride {
         Stride {
-            side: self.side,
-            start: self.first_frame,
-            end: self.last_frame,
+            at: self.at,
+            ..Stride::on_frames(self.side, self.first_frame, self.last_frame)
         }
     }
 }
@@ -307,6 +309,7 @@ fn measure(ev: &Evidence, s: &Stride, reference: [f64; 2], median_s: f64) -> Cyc
         swapped_frames: ev.swapped[a..=b].iter().filter(|&&x| x).count(),
         unsure_frames: ev.unsure[a..=b].iter().filter(|&&x| x).count(),
         bout: None,
+        at: s.at,
     }
 }
 

@@ -63,11 +63,7 @@ fn bout(first: usize, last: usize) -> Bout {
 /// Four left strides of 34 frames (1.13 s, the walker's) from frame 10.
 fn strides() -> Vec<Stride> {
     (0..4)
-        .map(|k| Stride {
-            side: Side::Left,
-            start: 10 + 34 * k,
-            end: 44 + 34 * k,
-        })
+        .map(|k| Stride::on_frames(Side::Left, 10 + 34 * k, 44 + 34 * k))
         .collect()
 }
 
@@ -202,11 +198,7 @@ fn a_stride_across_two_bouts_is_rejected() {
 #[test]
 fn strides_over_excluded_frames_are_rejected() {
     let mut c = Case::new();
-    let stride = |start: usize, end: usize| Stride {
-        side: Side::Left,
-        start,
-        end,
-    };
+    let stride = |start: usize, end: usize| Stride::on_frames(Side::Left, start, end);
     // Two strides of 46 frames between two of 34: over all four the median would be 40.
     let s = [
         stride(10, 44),
