@@ -224,10 +224,7 @@ mod tests {
             hs(Side::Right, 25),
         ];
         let s = strides(&ev, 30.0, 0.5, 3.0);
-        assert_eq!(
-            s,
-            vec![Stride::on_frames(Side::Left, 10, 40)]
-        );
+        assert_eq!(s, vec![Stride::on_frames(Side::Left, 10, 40)]);
         let series: Vec<f64> = (0..50).map(|i| i as f64).collect();
         let r = resample(&series, 5, &s[0]).unwrap();
         assert_eq!((r[0], r[50], r[100]), (5.0, 20.0, 35.0));
@@ -246,7 +243,10 @@ mod tests {
         assert_eq!(s[0].span(), [10.4, 39.6]);
         let series: Vec<f64> = (0..50).map(|i| i as f64).collect();
         let r = resample(&series, 5, &s[0]).unwrap();
-        assert!((r[0] - 5.4).abs() < 1e-9 && (r[100] - 34.6).abs() < 1e-9, "{r:?}");
+        assert!(
+            (r[0] - 5.4).abs() < 1e-9 && (r[100] - 34.6).abs() < 1e-9,
+            "{r:?}"
+        );
         // A last heel strike after the last sample: the frames' span instead.
         let short: Vec<f64> = (0..36).map(|i| i as f64).collect();
         let late = Stride {
