@@ -11,39 +11,30 @@ pub(crate) fn pad(x: &[f32], dims: &[usize], pads: &[(usize, usize)]) -> Out {
         bail!("pad: {} paddings for shape {dims:?}", pads.len())
     }
     let out_dims: Vec<usize> = dims.iter().zip(pads).map(|(d, (a, b))| d + a + b).collect();
-    let total = out_dims.iter().product();
-    // Written in order, zeros and rows appended as they come: zeroing the
-    // whole output first and copying the rows in after was two passes.
-    let mut out = Vec::with_capacity(total);
+    let mut out = vec![0f32; out_dims.iter().product()];
     if x.is_empty() {
-        out.resize(total, 0.0);
-    } else {
-        append_padded(&mut out, x, dims, pads, &out_dims);
+        return Ok((out, Shape::from(out_dims)));
     }
-    debug_assert_eq!(out.len(), total);
-    Ok((out, Shape::from(out_dims)))
-}
-
-/// Appends `x` (shape `dims`, outermost axis first) padded by `pads` to `out`.
-fn append_padded(
-    out: &mut Vec<f32>,
-    x: &[f32],
-    dims: &[usize],
-    pads: &[(usize, usize)],
-    out_dims: &[usize],
-) {
-    let (before, after) = pads[0];
-    // Values in one step of this axis, in the output.
-    let step: usize = out_dims[1..].iter().product();
-    out.resize(out.len() + before * step, 0.0);
-    if dims.len() == 1 {
-        out.extend_from_slice(x);
-    } else {
-        for part in x.chunks_exact(x.len() / dims[0]) {
-            append_padded(out, part, &dims[1..], &pads[1..], &out_dims[1..]);
+    let r = dims.len();
+    let inner = dims[r - 1];
+    // Copy each innermost row of the input to its place in the output.
+    let mut idx = vec![0usize; r - 1];
+    for row in x.chunks_exact(inner) {
+        let mut off = 0;
+        for d in 0..r - 1 {
+            off = off * out_dims[d] + idx[d] + pads[d].0;
+        }
+        off = off * out_dims[r - 1] + pads[r - 1].0;
+        out[off..off + inner].copy_from_slice(row);
+        for d in (0..r - 1).rev() {
+            idx[d] += 1;
+            if idx[d] < dims[d] {
+                break;
+            }
+            idx[d] = 0;
         }
     }
-    out.resize(out.len() + after * step, 0.0);
+    Ok((out, Shape::from(out_dims)))
 }
 
 #[cfg(test)]
