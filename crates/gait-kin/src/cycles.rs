@@ -95,7 +95,8 @@ fn resample_span(series: &[f64], first_frame: usize, span: [f64; 2]) -> Option<V
     }
     (0..=100)
         .map(|p| {
-            let pos = a + (b - a) * p as f64 / 100.0;
+            // At most `b`: rounding must not reach past the last sample checked above.
+            let pos = (a + (b - a) * p as f64 / 100.0).min(b);
             let i = pos.floor() as usize;
             let f = pos - i as f64;
             let v = if f == 0.0 {
