@@ -168,14 +168,17 @@ mod tests {
     /// side: absent, saying so; the same mean from cycles that agree is present.
     #[test]
     fn a_mean_past_the_threshold_by_less_than_its_standard_error_is_not_called() {
-        let v = judge(
-            TRUNK,
-            Side::Left,
-            &at(&[2.0, 12.0]),
-            t(5.0, "above"),
-            "deg",
-            "none",
-        );
+        let above_5 = |values: &[f64]| {
+            judge(
+                TRUNK,
+                Side::Left,
+                &at(values),
+                t(5.0, "above"),
+                "deg",
+                "none",
+            )
+        };
+        let v = above_5(&[2.0, 12.0]);
         assert_eq!(v.status, Status::Absent);
         assert!(
             v.reason.contains("1 of 2 past the threshold"),
@@ -183,25 +186,10 @@ mod tests {
             v.reason
         );
         assert_eq!(v.cycles, vec![100]);
-        let v = judge(
-            TRUNK,
-            Side::Left,
-            &at(&[6.5, 7.5]),
-            t(5.0, "above"),
-            "deg",
-            "none",
-        );
+        let v = above_5(&[6.5, 7.5]);
         assert_eq!((v.status, v.reason.as_str()), (Status::Present, ""));
         // A single cycle has no spread: its value decides.
-        let v = judge(
-            TRUNK,
-            Side::Left,
-            &at(&[5.5]),
-            t(5.0, "above"),
-            "deg",
-            "none",
-        );
-        assert_eq!(v.status, Status::Present);
+        assert_eq!(above_5(&[5.5]).status, Status::Present);
     }
 
     #[test]
