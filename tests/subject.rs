@@ -151,3 +151,41 @@ fn whole_sample_video_follows_the_walker_only_while_she_walks() {
     );
     assert!(report.contains("Walking bouts") && report.contains("Cycle quality"));
 }
+
+/// `[subject] detect_every = 2` against the default on the sample, sharing
+/// the cache (it holds detections only, so the sparse run detects what it
+/// would detect afresh): the same walker over the same frames, a good share
+/// of the detector's frames spared, every event within a frame.
+#[test]
+fn the_detector_on_every_second_frame_follows_the_same_walker() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = format!("run.cache_dir={:?}", dir.path().join("cache"));
+    let run = |name: &str, every: &str| {
+        let out = dir.path().join(name);
+        let set = format!("subject.detect_every={every}");
+        run_ok(run_on(&sample_video(), &out).args(["--set", &cache, "--set", &set]));
+        (
+            read_json(&out.join("run.json")),
+            events(&out.join("events.csv")),
+        )
+    };
+    let (dense, dense_events) = run("dense", "1");
+    let (sparse, sparse_events) = run("sparse", "2");
+    let (d, s) = (&dense["subject"], &sparse["subject"]);
+    assert_eq!(d["interpolated_frames"], 0);
+    let spared = s["interpolated_frames"].as_u64().unwrap();
+    assert!(spared >= 30, "only {spared} frames interpolated");
+    assert_eq!(s["in_view"], d["in_view"]);
+    assert_eq!(s["chosen"], d["chosen"]);
+    assert_eq!(
+        sparse_events.len(),
+        dense_events.len(),
+        "{sparse_events:?} vs {dense_events:?}"
+    );
+    for (a, b) in sparse_events.iter().zip(&dense_events) {
+        assert!(
+            a.0 == b.0 && a.1 == b.1 && (a.2 - b.2).abs() <= 1,
+            "{a:?} vs {b:?}"
+        );
+    }
+}

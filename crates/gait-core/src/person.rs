@@ -18,6 +18,11 @@ pub struct PersonBox {
     pub top: [f32; 2],
     /// The detector's score in [0, 1].
     pub score: f32,
+    /// Interpolated between the detections of the frames either side (the
+    /// subject pass ran no detector on this frame, see `[subject]
+    /// detect_every`): an estimator that crops from the box detects again.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub interpolated: bool,
 }
 
 impl PersonBox {
@@ -33,6 +38,19 @@ impl PersonBox {
             centre: [cx, cy],
             top: [cx, cy - size / 2.5],
             score,
+            interpolated: false,
+        }
+    }
+
+    /// The box a share `t` of the way from `self` to `other` (centre and top
+    /// point on straight lines; the lower score).
+    pub fn lerp(&self, other: &PersonBox, t: f32) -> Self {
+        let mix = |p: [f32; 2], q: [f32; 2]| [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+        Self {
+            centre: mix(self.centre, other.centre),
+            top: mix(self.top, other.top),
+            score: self.score.min(other.score),
+            interpolated: false,
         }
     }
 

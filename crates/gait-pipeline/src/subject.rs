@@ -60,7 +60,8 @@ pub(crate) fn find(
         .into_iter()
         .chain(owned.iter_mut().map(|m| m.as_mut()))
         .collect();
-    let Some(frames) = sightings(config, info, &mut models, cache, record, bar)? else {
+    let Some((frames, interpolated)) = sightings(config, info, &mut models, cache, record, bar)?
+    else {
         return Ok(Found::Off(Some(
             "the pose stage cannot list the people in a frame: no subject tracking, the estimator picks a person frame by frame".into(),
         )));
@@ -79,7 +80,12 @@ pub(crate) fn find(
         fps,
         (info.width, info.height),
     )
-    .map(Found::Subject)
+    .map(|s| {
+        Found::Subject(gait_subject::Subject {
+            interpolated_frames: interpolated,
+            ..s
+        })
+    })
     .map_err(|e| PipelineError::input(&info.path, e))
 }
 
@@ -87,8 +93,11 @@ pub(crate) fn find(
 type FramePeople = Vec<(usize, Vec<Sighting>)>;
 
 /// The people of every frame in range, or `None` when the estimator cannot
-/// list them. Uncached frames are gathered into batches of a few frames per
-/// model and shared out among the models.
+/// list them. Every `detect_every`-th frame is an anchor: the anchors of a
+/// few frames per model are detected (or loaded from the cache) at once,
+/// then the frames between each two anchors are interpolated where
+/// [`gait_subject::sparse`] allows, else detected. The cache holds only
+/// detections, so a repeated or resumed run decides alike.
 fn sightings(
     config: &PipelineConfig,
     info: &InputInfo,
@@ -96,14 +105,21 @@ fn sightings(
     cache: &StageCache,
     record: &mut StageRecord,
     bar: &Progress,
-) -> Result<Option<FramePeople>, PipelineError> {
+) -> Result<Option<(FramePeople, usize)>, PipelineError> {
     let (first, last) = (config.input.first_frame, config.input.last_frame);
+    let every = config.subject.detect_every.max(1);
     let mut reader = info.frames()?;
-    let mut out: Vec<(usize, Option<Vec<Sighting>>)> = Vec::new();
-    let mut pending: Vec<Frame> = Vec::new();
-    // One frame per model: the reader decodes the next ones meanwhile, and
-    // every frame held costs a full-size image.
-    let batch = models.len();
+    let mut pass = Sparse {
+        models,
+        cache,
+        record,
+        out: Vec::new(),
+        anchor: None,
+        interpolated: 0,
+    };
+    // Frames after the last settled anchor; one anchor per model each time.
+    let mut chunk: Vec<Frame> = Vec::new();
+    let mut anchors = 0;
     let mut done = false;
     while !done {
         match reader.next_frame()? {
@@ -113,42 +129,152 @@ fn sightings(
                     continue;
                 }
                 bar.tick()?;
-                let seen = cache.load_json::<Vec<Sighting>>(frame.index);
-                record.cached += usize::from(seen.is_some());
-                out.push((frame.index, seen.clone()));
-                if seen.is_none() {
-                    pending.push(frame);
-                }
+                anchors += usize::from((frame.index - first) % every == 0);
+                chunk.push(frame);
             }
             _ => done = true,
         }
-        if pending.len() == batch || (done && !pending.is_empty()) {
+        if (anchors == pass.models.len() || done) && !chunk.is_empty() {
+            if !pass.settle(std::mem::take(&mut chunk), first, every)? {
+                return Ok(None);
+            }
+            anchors = 0;
+        }
+    }
+    Ok(Some((pass.out, pass.interpolated)))
+}
+
+/// The subject pass's frames settled so far, and what settles the next.
+struct Sparse<'m, 'a, 'b> {
+    models: &'m mut [&'a mut Model],
+    cache: &'b StageCache,
+    record: &'b mut StageRecord,
+    out: FramePeople,
+    /// Index into `out` of the last anchor.
+    anchor: Option<usize>,
+    interpolated: usize,
+}
+
+impl Sparse<'_, '_, '_> {
+    /// Settles `chunk` (frames in order, ending on an anchor or at the end
+    /// of the range, which is taken as one): false when the estimator cannot
+    /// list people.
+    fn settle(
+        &mut self,
+        chunk: Vec<Frame>,
+        first: usize,
+        every: usize,
+    ) -> Result<bool, PipelineError> {
+        let n = chunk.len();
+        let is_anchor = |i: usize, f: &Frame| (f.index - first) % every == 0 || i + 1 == n;
+        let anchors: Vec<&Frame> = chunk
+            .iter()
+            .enumerate()
+            .filter(|(i, f)| is_anchor(*i, f))
+            .map(|(_, f)| f)
+            .collect();
+        let Some(anchor_people) = self.detected(&anchors)? else {
+            return Ok(false);
+        };
+        let mut people: Vec<Option<Vec<Sighting>>> = vec![None; n];
+        let mut k = 0;
+        for (i, f) in chunk.iter().enumerate() {
+            if is_anchor(i, f) {
+                people[i] = Some(anchor_people[k].clone());
+                k += 1;
+            }
+        }
+        // The frames between two anchors: interpolated, else detected.
+        let mut before = self.anchor.map(|a| self.out[a].clone());
+        let mut gap_start = 0;
+        let mut to_detect: Vec<usize> = Vec::new();
+        for i in 0..n {
+            let Some(here) = people[i].clone() else {
+                continue;
+            };
+            let gap = gap_start..i;
+            let fill = before.as_ref().and_then(|(fa, sa)| {
+                gait_subject::sparse::between((*fa, sa), (chunk[i].index, &here))
+            });
+            match fill {
+                Some(found) => {
+                    for ((_, boxes), j) in found.into_iter().zip(gap) {
+                        self.interpolated += 1;
+                        people[j] = Some(with_appearance(&chunk[j], boxes));
+                    }
+                }
+                None => to_detect.extend(gap),
+            }
+            before = Some((chunk[i].index, here));
+            gap_start = i + 1;
+        }
+        let frames: Vec<&Frame> = to_detect.iter().map(|&i| &chunk[i]).collect();
+        let Some(found) = self.detected(&frames)? else {
+            return Ok(false);
+        };
+        for (i, seen) in to_detect.into_iter().zip(found) {
+            people[i] = Some(seen);
+        }
+        for (f, seen) in chunk.iter().zip(people) {
+            self.out.push((f.index, seen.unwrap_or_default()));
+        }
+        self.anchor = Some(self.out.len() - 1);
+        Ok(true)
+    }
+
+    /// The detected people of `frames`, from the cache or the models (and
+    /// then cached); `None` when the estimator cannot list people.
+    fn detected(&mut self, frames: &[&Frame]) -> Result<Option<Vec<Vec<Sighting>>>, PipelineError> {
+        let mut out: Vec<Option<Vec<Sighting>>> = frames
+            .iter()
+            .map(|f| self.cache.load_json::<Vec<Sighting>>(f.index))
+            .collect();
+        self.record.cached += out.iter().filter(|s| s.is_some()).count();
+        let pending: Vec<&Frame> = frames
+            .iter()
+            .zip(&out)
+            .filter(|(_, s)| s.is_none())
+            .map(|(f, _)| *f)
+            .collect();
+        if !pending.is_empty() {
             let t = Instant::now();
-            let Some(found) = people(models, &pending)? else {
+            let Some(found) = people(self.models, &pending)? else {
                 return Ok(None);
             };
-            record.seconds += t.elapsed().as_secs_f64();
-            record.computed += pending.len();
-            for (frame, seen) in pending.drain(..).zip(found) {
-                cache.store_json(frame.index, &seen)?;
-                if let Some(slot) = out.iter_mut().rev().find(|(f, _)| *f == frame.index) {
-                    slot.1 = Some(seen);
+            self.record.seconds += t.elapsed().as_secs_f64();
+            self.record.computed += pending.len();
+            let mut found = found.into_iter();
+            for (frame, slot) in frames.iter().zip(out.iter_mut()) {
+                if slot.is_none() {
+                    let seen = found.next().unwrap_or_default();
+                    self.cache.store_json(frame.index, &seen)?;
+                    *slot = Some(seen);
                 }
             }
         }
+        Ok(Some(
+            out.into_iter().map(Option::unwrap_or_default).collect(),
+        ))
     }
-    Ok(Some(
-        out.into_iter()
-            .map(|(f, seen)| (f, seen.unwrap_or_default()))
-            .collect(),
-    ))
+}
+
+/// Interpolated people of `frame`, with their appearance measured there.
+fn with_appearance(frame: &Frame, boxes: Vec<gait_core::PersonBox>) -> Vec<Sighting> {
+    boxes
+        .into_iter()
+        .map(|person| Sighting {
+            frame: frame.index,
+            person,
+            appearance: Appearance::of(&frame.image, &person),
+        })
+        .collect()
 }
 
 /// The people of each of `frames`, the frames shared out among `models`
 /// (one thread each); `None` when the estimator cannot list people.
 fn people(
     models: &mut [&mut Model],
-    frames: &[Frame],
+    frames: &[&Frame],
 ) -> Result<Option<Vec<Vec<Sighting>>>, PipelineError> {
     let per = frames.len().div_ceil(models.len()).max(1);
     let results: Vec<Result<Option<Vec<Vec<Sighting>>>, PipelineError>> = std::thread::scope(|s| {
@@ -182,7 +308,7 @@ fn people(
 /// The people in each frame, with their appearance.
 fn of_frames(
     model: &mut dyn PoseEstimator,
-    frames: &[Frame],
+    frames: &[&Frame],
 ) -> Result<Option<Vec<Vec<Sighting>>>, PipelineError> {
     let mut out = Vec::with_capacity(frames.len());
     for frame in frames {

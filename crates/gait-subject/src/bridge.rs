@@ -55,7 +55,7 @@ pub(crate) fn boxes(
             continue;
         }
         for f in a.frame + 1..b.frame {
-            let between = interpolate(a, b, f);
+            let between = a.towards(b, f);
             if look.someone_else(f, &between).is_none() {
                 out.insert(f, between);
             }
@@ -107,6 +107,7 @@ fn moved(at: &Sighting, other: &Sighting, frame: usize) -> PersonBox {
         centre: shift(at.person.centre, other.person.centre, at.person.centre),
         top: shift(at.person.centre, other.person.centre, at.person.top),
         score: at.person.score,
+        interpolated: false,
     }
 }
 
@@ -179,7 +180,7 @@ impl Lookalike<'_> {
                 continue;
             }
             for f in a.frame + 1..b.frame {
-                let on = self.on_box(f, &interpolate(a, b, f));
+                let on = self.on_box(f, &a.towards(b, f));
                 if let Some((o, true)) = on.first() {
                     out.push(**o);
                 }
@@ -187,17 +188,6 @@ impl Lookalike<'_> {
         }
         out.extend(own.last().copied());
         out
-    }
-}
-
-/// The box in `frame` on the straight way from `a` to `b`.
-fn interpolate(a: &Sighting, b: &Sighting, frame: usize) -> PersonBox {
-    let t = (frame - a.frame) as f32 / (b.frame - a.frame) as f32;
-    let mix = |p: [f32; 2], q: [f32; 2]| [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
-    PersonBox {
-        centre: mix(a.person.centre, b.person.centre),
-        top: mix(a.person.top, b.person.top),
-        score: a.person.score.min(b.person.score),
     }
 }
 

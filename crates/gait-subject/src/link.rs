@@ -14,6 +14,14 @@ pub struct Sighting {
     pub appearance: Appearance,
 }
 
+impl Sighting {
+    /// The box in `frame` on the straight way from this sighting to `later`.
+    pub fn towards(&self, later: &Sighting, frame: usize) -> PersonBox {
+        let t = (frame - self.frame) as f32 / (later.frame - self.frame) as f32;
+        self.person.lerp(&later.person, t)
+    }
+}
+
 /// The sightings of one person, in frame order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Track {

@@ -2,7 +2,7 @@
 //! body, a track that takes over where another ended, and two tracks that
 //! take one person's frames in turn.
 
-use crate::link::{LinkLimits, Sighting, Track};
+use crate::link::{LinkLimits, Track};
 
 /// Two tracks are one person only when their boxes coincide in at least this
 /// many frames (or in every frame of the shorter one): a single shared frame
@@ -148,7 +148,7 @@ fn on_way_of(a: &Track, b: &Track, first: usize, last: usize) -> bool {
             k.checked_sub(1).map(|j| &a.sightings[j]),
         ) {
             (Some(at), _) if at.frame == s.frame => at.person,
-            (Some(next), Some(prev)) => between(prev, next, s.frame),
+            (Some(next), Some(prev)) => prev.towards(next, s.frame),
             _ => return false,
         };
         let size = way.size().min(s.person.size()).max(1.0);
@@ -158,17 +158,6 @@ fn on_way_of(a: &Track, b: &Track, first: usize, last: usize) -> bool {
         n += 1;
     }
     n >= MIN_SHARED
-}
-
-/// The box in `frame` on the straight way from `a` to `b`.
-fn between(a: &Sighting, b: &Sighting, frame: usize) -> gait_core::PersonBox {
-    let t = (frame - a.frame) as f32 / (b.frame - a.frame) as f32;
-    let mix = |p: [f32; 2], q: [f32; 2]| [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
-    gait_core::PersonBox {
-        centre: mix(a.person.centre, b.person.centre),
-        top: mix(a.person.top, b.person.top),
-        score: a.person.score.min(b.person.score),
-    }
 }
 
 /// `b`'s sightings added to `a`; where both saw the person, `a`'s stay.
