@@ -129,7 +129,7 @@ fn sightings(
                     continue;
                 }
                 bar.tick()?;
-                anchors += usize::from((frame.index - first) % every == 0);
+                anchors += usize::from((frame.index - first).is_multiple_of(every));
                 chunk.push(frame);
             }
             _ => done = true,
@@ -166,7 +166,7 @@ impl Sparse<'_, '_, '_> {
         every: usize,
     ) -> Result<bool, PipelineError> {
         let n = chunk.len();
-        let is_anchor = |i: usize, f: &Frame| (f.index - first) % every == 0 || i + 1 == n;
+        let is_anchor = |i: usize, f: &Frame| (f.index - first).is_multiple_of(every) || i + 1 == n;
         let anchors: Vec<&Frame> = chunk
             .iter()
             .enumerate()
