@@ -258,7 +258,7 @@ impl Sparse<'_, '_, '_> {
     }
 }
 
-/// Interpolated people of `frame`, with their appearance measured there.
+/// The people at `boxes` in `frame`, with their appearance measured there.
 fn with_appearance(frame: &Frame, boxes: Vec<gait_core::PersonBox>) -> Vec<Sighting> {
     boxes
         .into_iter()
@@ -315,16 +315,7 @@ fn of_frames(
         let Some(people) = model.people(frame)? else {
             return Ok(None);
         };
-        out.push(
-            people
-                .into_iter()
-                .map(|person| Sighting {
-                    frame: frame.index,
-                    person,
-                    appearance: Appearance::of(&frame.image, &person),
-                })
-                .collect(),
-        );
+        out.push(with_appearance(frame, people));
     }
     Ok(Some(out))
 }
