@@ -4,7 +4,7 @@ use std::path::Path;
 
 use crate::KinError;
 use crate::config::Side;
-use crate::events::{Event, EventKind, sort};
+use crate::event::{Event, EventKind, sort};
 
 /// Reads `side,event,frame[,time_s]` (header required; extra columns ignored).
 pub fn read_csv(path: &Path) -> Result<Vec<Event>, KinError> {

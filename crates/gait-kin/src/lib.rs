@@ -30,6 +30,7 @@ pub mod config;
 pub mod corrections;
 pub mod cycles;
 pub mod direction;
+mod event;
 pub mod events;
 mod events_csv;
 mod feet;
@@ -46,6 +47,7 @@ pub mod smooth;
 pub mod spatiotemporal;
 pub mod spikes;
 pub mod spline;
+mod stance_check;
 mod steps;
 pub mod swap;
 #[cfg(test)]

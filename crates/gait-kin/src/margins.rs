@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 use crate::config::{KinematicsConfig, Side};
-use crate::events::EventKind;
+use crate::event::EventKind;
 use crate::peaks::GaitPeaks;
 use crate::quality::CycleQuality;
 
