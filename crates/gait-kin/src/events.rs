@@ -91,15 +91,6 @@ pub struct ZeniRefined {
     /// and 7 of 7 toe-offs on the sample are within a frame of the heel-and-toe run's
     /// (tests/robustness.rs).
     pub ankle_toe_speed_fraction: f64,
-    /// Toe-offs of a model with toes and ankles at the mean of the toe's crossing and the
-    /// ankle's (at `ankle_toe_speed_fraction`), where both cross. While the foot rolls over
-    /// the toes, the toe point creeps forward at about the walking speed for several frames,
-    /// so which frame crosses turns on a few pixels; and at the far foot's toe-off the pose
-    /// model puts its toe on the near foot for single frames (the sample's right toe at 80,
-    /// 84 and 86). Re-encodings of the sample moved its right toe-off at 85 (85 in the manual
-    /// annotation) to 82-83 from the toe alone; the ankle, calibrated to the toe, is a second
-    /// estimate that such a slip moves by itself, and the mean halves either's error.
-    pub toe_off_with_ankle: bool,
     pub refine_s: f64,
     /// Peaks closer than this (seconds) are merged, keeping the larger.
     pub min_stride_s: f64,
@@ -117,7 +108,6 @@ impl Default for ZeniRefined {
             speed_fraction: 0.5,
             toe_speed_fraction: 1.0,
             ankle_toe_speed_fraction: 1.5,
-            toe_off_with_ankle: true,
             refine_s: 0.2,
             min_stride_s: 0.5,
             // Walking has double support, so each stance is over half the stride (about 60 %
@@ -183,12 +173,6 @@ pub(crate) fn ground_speed(t: &Tracks, dirs: &[Direction]) -> Vec<f64> {
             win[win.len() / 2]
         })
         .collect()
-}
-
-/// The mean of two threshold crossings, each a frame and a fraction towards the next.
-fn mean_crossing((i, f): (usize, f64), (j, g): (usize, f64)) -> (usize, f64) {
-    let m = (i as f64 + f + j as f64 + g) / 2.0;
-    (m.floor() as usize, m.fract())
 }
 
 impl ZeniRefined {
@@ -278,28 +262,20 @@ impl ZeniRefined {
         };
         // Toe-off: where the toe's speed rises through `toe_speed_fraction`, searched from the
         // extremum towards the side where the toe is on the wrong side of it.
-        let toe_off_of = |j: usize, p: usize| {
+        let toe_off = |p: usize| {
             let vp = walking_speed(p);
-            let v0 = speed(j, p);
+            let v0 = speed(toe, p);
             if !(self.toe_speed_fraction > 0.0 && vp.is_finite() && vp > 0.0 && v0.is_finite()) {
                 // 0 keeps Zeni's extremum for the ankle too.
                 return None;
             }
-            let frac = if t.names[j].ends_with("_ankle") {
+            let frac = if t.names[toe].ends_with("_ankle") {
                 self.ankle_toe_speed_fraction
             } else {
                 self.toe_speed_fraction
             };
             let target = frac * vp;
-            crossing(j, p, target, true, v0 <= target)
-        };
-        // With a toe and an ankle, the mean of their crossings (see `toe_off_with_ankle`).
-        let ankle = t
-            .seen_leg_index(side, "ankle")
-            .filter(|&k| k != toe && self.toe_off_with_ankle);
-        let toe_off = |p: usize| match (toe_off_of(toe, p), ankle.and_then(|k| toe_off_of(k, p))) {
-            (Some(a), Some(b)) => Some(mean_crossing(a, b)),
-            (a, b) => a.or(b),
+            crossing(toe, p, target, true, v0 <= target)
         };
         // At the crossing, else at Zeni's extremum.
         let event = |event, p: usize, crossed: Option<(usize, f64)>| match crossed {
