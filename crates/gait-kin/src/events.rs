@@ -353,14 +353,7 @@ impl EventDetector for ZeniRefined {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing;
-
-    fn toe_offs(ev: &[Event]) -> Vec<(Side, usize)> {
-        ev.iter()
-            .filter(|e| e.event == EventKind::ToeOff)
-            .map(|e| (e.side, e.frame))
-            .collect()
-    }
+    use crate::testing::{self, toe_offs};
 
     /// A pose model's hip jitter (here the pelvis alternately 8 px ahead and behind, more than
     /// it walks in a frame) leaves the toe-offs where they were; Zeni's bare extremum moves.

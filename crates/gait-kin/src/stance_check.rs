@@ -38,13 +38,7 @@ pub fn drop_implausible_toe_offs(ev: &mut Vec<Event>, min_share: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn toe_offs(ev: &[Event]) -> Vec<(Side, usize)> {
-        ev.iter()
-            .filter(|e| e.event == EventKind::ToeOff)
-            .map(|e| (e.side, e.frame))
-            .collect()
-    }
+    use crate::testing::toe_offs;
 
     #[test]
     fn toe_offs_right_after_their_heel_strike_are_dropped() {

@@ -1,5 +1,7 @@
 //! Synthetic side-view walkers for the unit tests.
 
+use crate::config::Side;
+use crate::event::{Event, EventKind};
 use crate::tracks::{LEG, Tracks};
 
 /// Stride length in pixels (1.5 leg lengths of about 300 px).
@@ -83,4 +85,12 @@ pub fn walker(fps: f64, n: usize, pos: impl Fn(usize) -> f64) -> Tracks {
 pub fn treadmill(fps: f64, n: usize, belt: f64) -> Tracks {
     let travel: Vec<f64> = (0..n).map(|i| belt * i as f64 / fps).collect();
     legs(fps, &vec![600.0; n], &travel, &vec![1.0; n])
+}
+
+/// `(side, frame)` of the toe-offs among `ev`.
+pub fn toe_offs(ev: &[Event]) -> Vec<(Side, usize)> {
+    ev.iter()
+        .filter(|e| e.event == EventKind::ToeOff)
+        .map(|e| (e.side, e.frame))
+        .collect()
 }
