@@ -5,7 +5,7 @@ use gait_core::PoseSequence;
 
 use crate::corrections::{self, Corrections};
 use crate::{PostprocessConfig, Tracks, View};
-use crate::{Steps, collapse, frontal, glitch, smooth, spikes, swap};
+use crate::{Steps, collapse, foot_shape, frontal, glitch, smooth, spikes, swap};
 
 /// The keypoints after cleaning, plus what the quality rules need from before it.
 pub(crate) struct Cleaned {
@@ -24,7 +24,7 @@ pub(crate) struct Cleaned {
 }
 
 /// Likelihood gate -> glitches dropped -> collapsed frames dropped -> swap correction ->
-/// single-frame jumps dropped -> the corrections' swaps and keypoints -> gap filling ->
+/// single-frame jumps dropped -> misplaced heels and toes dropped -> the corrections' swaps and keypoints -> gap filling ->
 /// smoothing (collapsed frames filled after it).
 pub(crate) fn clean(
     seq: &PoseSequence,
@@ -43,6 +43,7 @@ pub(crate) fn clean(
     let collapsed = drop_collapsed(&mut t, steps, view, warnings);
     let mut labels = correct_labels(&mut t, &mut raw, steps, view);
     drop_spikes(&mut t, view, warnings);
+    drop_misplaced_feet(&mut t, view, warnings);
     // A person's swaps come after the automatic correction, which therefore cannot undo them;
     // their frames stop counting as swapped (a confirmed fix, see `apply_swaps`).
     corrections::apply_swaps(
@@ -146,6 +147,21 @@ fn drop_spikes(t: &mut Tracks, view: View, warnings: &mut Vec<String>) {
     if spikes > 0 {
         warnings.push(format!(
             "{spikes} single-frame jumps of a knee or foot keypoint dropped (bridged)"
+        ));
+    }
+}
+
+/// A heel or toe drawn where the foot cannot be (too near or too far from its ankle) moves
+/// the events as a spike does, over a frame or two. Side views only: in a front or back view
+/// the foot turns out of the image plane and its image shrinks.
+fn drop_misplaced_feet(t: &mut Tracks, view: View, warnings: &mut Vec<String>) {
+    if view.is_frontal() {
+        return;
+    }
+    let dropped = foot_shape::FootShapeRule::default().drop(t);
+    if dropped > 0 {
+        warnings.push(format!(
+            "{dropped} heel or toe keypoints dropped (bridged) where the foot's distance from its ankle was implausible"
         ));
     }
 }

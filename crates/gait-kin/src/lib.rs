@@ -34,6 +34,7 @@ mod event;
 pub mod events;
 mod events_csv;
 mod feet;
+mod foot_shape;
 pub mod frontal;
 pub mod glitch;
 mod input_check;
