@@ -91,15 +91,6 @@ pub struct ZeniRefined {
     /// and 7 of 7 toe-offs on the sample are within a frame of the heel-and-toe run's
     /// (tests/robustness.rs).
     pub ankle_toe_speed_fraction: f64,
-    /// The toe's speed is its change over this many seconds either side (at least a frame),
-    /// the heel's over one frame. Before it leaves the ground the toe rolls forward at about
-    /// the walking speed for a few frames, so its frame-to-frame speed lies on the threshold
-    /// and a few pixels of keypoint noise decide where it crosses: the sample's far toe ran
-    /// 11.4, 11.3, 11.4 px/frame against a walking speed of about 11 in its CRF 23 copy, 3.7,
-    /// 2.8, 10 in the original, and the toe-off came 3 frames apart. Over +-0.05 s (2 frames
-    /// at 30 fps) the rise through the threshold is steady in both, and the heel, which stops
-    /// within a frame at heel strike, keeps its sharp single-frame speed.
-    pub toe_speed_window_s: f64,
     pub refine_s: f64,
     /// Peaks closer than this (seconds) are merged, keeping the larger.
     pub min_stride_s: f64,
@@ -117,7 +108,6 @@ impl Default for ZeniRefined {
             speed_fraction: 0.5,
             toe_speed_fraction: 1.0,
             ankle_toe_speed_fraction: 1.5,
-            toe_speed_window_s: 0.05,
             refine_s: 0.2,
             min_stride_s: 0.5,
             // Walking has double support, so each stance is over half the stride (about 60 %
@@ -133,17 +123,12 @@ impl Default for ZeniRefined {
 /// Forward speed (pixels/s) of keypoint `j` at frame `i` by central differences; NaN at the ends,
 /// where a neighbour is missing, or where the direction is unknown.
 fn forward_speed(t: &Tracks, dirs: &[Direction], j: usize, i: usize) -> f64 {
-    forward_speed_over(t, dirs, j, i, 1)
-}
-
-/// As [`forward_speed`], over `k` frames either side.
-fn forward_speed_over(t: &Tracks, dirs: &[Direction], j: usize, i: usize, k: usize) -> f64 {
     let d = dirs.get(i).map_or(0.0, |d| d.sign());
-    if i < k || i + k >= t.len() || d == 0.0 {
+    if i == 0 || i + 1 >= t.len() || d == 0.0 {
         return f64::NAN;
     }
-    match (t.at(j, i - k), t.at(j, i + k)) {
-        (Some(a), Some(b)) => d * (b.0 - a.0) * t.fps / (2 * k) as f64,
+    match (t.at(j, i - 1), t.at(j, i + 1)) {
+        (Some(a), Some(b)) => d * (b.0 - a.0) * t.fps / 2.0,
         _ => f64::NAN,
     }
 }
@@ -219,11 +204,7 @@ impl ZeniRefined {
         let min_dist = (self.min_stride_s * fps).round() as usize;
         let prom = 0.1 * leg;
         // Speeds over the ground (pixels/s).
-        let toe_k = ((self.toe_speed_window_s * fps).round() as usize).max(1);
-        let speed = |j: usize, i: usize| {
-            let k = if j == toe { toe_k } else { 1 };
-            forward_speed_over(t, dirs, j, i, k) - ground[i]
-        };
+        let speed = |j: usize, i: usize| forward_speed(t, dirs, j, i) - ground[i];
         // Over +-0.25 s, or as much of it as the pelvis is seen: near the start of a track
         // (a heel strike a few frames after the walker comes into view) the full window would
         // leave the event on Zeni's extremum, a frame or more from the crossing.
