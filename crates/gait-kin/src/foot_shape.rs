@@ -1,15 +1,15 @@
 //! Heels and toes drawn where the foot cannot be.
 //!
-//! The foot is rigid from the ankle to the heel and to the ball of the foot, and in a side view
+//! The foot is nearly rigid from the ankle to the heel and to the toes (which flex a little at
+//! push-off), and in a side view
 //! it turns in the image plane, so its image distances from the ankle stay nearly constant.
 //! A pose model that loses the far foot behind the near leg draws heel and toe tens of pixels
 //! away from it for a frame or two while the ankle stays put, and in which frames it does so
-//! changes with the encoding: on the bundled sample's CRF 18 copy the right toe stood 0.16-0.19
-//! leg lengths too far from its ankle in frames 81, 84 and 86, next to its toe-off, and the
-//! toe-off came two frames early (the original's feet stay within 0.05 leg lengths of their
-//! usual distance there). Such a heel or toe is dropped and the gap filler bridges it. The
-//! ankle is the reference because the foot hangs from it and the shank holds it in place:
-//! in those frames it is where the original's is.
+//! changes with the encoding: on the bundled sample's CRF 18 copy the right toe stood 0.14-0.19
+//! leg lengths off its usual distance from the ankle in frames 84 and 86, next to its toe-off,
+//! and the toe-off came two frames early. Such a heel or toe is dropped and the gap filler
+//! bridges it. The ankle is the reference because the foot hangs from it and the shank holds
+//! it in place: in those frames it is where the original's is.
 
 use crate::config::Side;
 use crate::tracks::{Tracks, dist, median};
@@ -24,10 +24,13 @@ pub struct FootShapeRule {
 
 impl Default for FootShapeRule {
     fn default() -> Self {
-        // Twice the largest change of a well-seen foot on the sample (0.045 leg lengths); the
-        // misplaced feet are 0.11-0.19 off. The window follows a walker whose size changes.
+        // Over the sample's walk the original's heels and toes stay within 0.09 leg lengths of
+        // their usual distance (95 % within 0.06; the near toe flexes at push-off), the
+        // misplaced far toes of its copies are 0.14-0.19 off. Chosen on the robustness matrix
+        // (BENCHMARKS.md): 0.08 and 0.1 held 9 of 16 variants, 0.12 held 10, 0.15 let the CRF
+        // 18 copy's toes through (9). The window follows a walker whose size changes.
         Self {
-            tolerance: 0.1,
+            tolerance: 0.12,
             window_s: 1.0,
         }
     }
@@ -100,11 +103,14 @@ mod tests {
         let clean = walker(30.0, 120, |i| 100.0 + 13.0 * i as f64);
         assert!(FootShapeRule::default().find(&clean).is_empty());
         let mut t = clean.clone();
-        let (toe, heel) = (t.index("right_toe").unwrap(), t.index("right_heel").unwrap());
+        let (toe, heel) = (
+            t.index("right_toe").unwrap(),
+            t.index("right_heel").unwrap(),
+        );
         let leg = t.leg_length();
         // Heel and toe moved together, away from the ankle that stays put.
         for j in [toe, heel] {
-            t.y[j][50] += 0.18 * leg;
+            t.y[j][50] += 0.25 * leg;
         }
         assert_eq!(FootShapeRule::default().drop(&mut t), 2);
         assert!(t.x[toe][50].is_nan() && t.x[heel][50].is_nan());
