@@ -1,8 +1,8 @@
 //! Heels and toes drawn where the foot cannot be.
 //!
 //! The foot is nearly rigid from the ankle to the heel and to the toes (which flex a little at
-//! push-off), and in a side view
-//! it turns in the image plane, so its image distances from the ankle stay nearly constant.
+//! push-off), and in a side view it turns in the image plane, so its image distances from the
+//! ankle stay nearly constant.
 //! A pose model that loses the far foot behind the near leg draws heel and toe tens of pixels
 //! away from it for a frame or two while the ankle stays put, and in which frames it does so
 //! changes with the encoding: on the bundled sample's CRF 18 copy the right toe stood 0.14-0.19
