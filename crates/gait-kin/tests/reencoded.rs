@@ -33,7 +33,10 @@ fn kinematics(file: &Path) -> KinResult {
 }
 
 fn events(r: &KinResult) -> Vec<(Side, EventKind, usize)> {
-    r.events.iter().map(|e| (e.side, e.event, e.frame)).collect()
+    r.events
+        .iter()
+        .map(|e| (e.side, e.event, e.frame))
+        .collect()
 }
 
 fn accepted(r: &KinResult) -> Vec<(Side, usize, usize)> {
