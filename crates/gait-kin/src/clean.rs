@@ -24,8 +24,8 @@ pub(crate) struct Cleaned {
 }
 
 /// Likelihood gate -> glitches dropped -> collapsed frames dropped -> swap correction ->
-/// single-frame jumps dropped -> misplaced heels and toes dropped -> the corrections' swaps and keypoints -> gap filling ->
-/// smoothing (collapsed frames filled after it).
+/// single-frame jumps and misplaced heels and toes dropped -> the corrections' swaps and
+/// keypoints -> gap filling -> smoothing (collapsed frames filled after it).
 pub(crate) fn clean(
     seq: &PoseSequence,
     post: &PostprocessConfig,
@@ -42,8 +42,7 @@ pub(crate) fn clean(
     glitch::drop_glitches(&mut t, warnings);
     let collapsed = drop_collapsed(&mut t, steps, view, warnings);
     let mut labels = correct_labels(&mut t, &mut raw, steps, view);
-    drop_spikes(&mut t, view, warnings);
-    drop_misplaced_feet(&mut t, view, warnings);
+    drop_misplaced(&mut t, view, warnings);
     // A person's swaps come after the automatic correction, which therefore cannot undo them;
     // their frames stop counting as swapped (a confirmed fix, see `apply_swaps`).
     corrections::apply_swaps(
@@ -136,33 +135,27 @@ fn correct_labels(t: &mut Tracks, raw: &mut Tracks, steps: &Steps, view: View) -
     labels
 }
 
-/// A knee or foot the model misplaced for one frame moves the events once filtered; judged on
-/// the corrected labels (an exchanged frame is a jump of both legs, not of one point), before
-/// a person's swaps (whose range edges are jumps by design). Side views only.
-fn drop_spikes(t: &mut Tracks, view: View, warnings: &mut Vec<String>) {
+/// Keypoints the model misplaced for a frame or two move the events once filtered: a knee or
+/// foot jumping for one frame, and a heel or toe drawn where the foot cannot be (too near or
+/// too far from its ankle). Judged on the corrected labels (an exchanged frame is a jump of
+/// both legs, not of one point), before a person's swaps (whose range edges are jumps by
+/// design). Side views only: in a front or back view the foot turns out of the image plane.
+fn drop_misplaced(t: &mut Tracks, view: View, warnings: &mut Vec<String>) {
     if view.is_frontal() {
         return;
     }
     let spikes = spikes::SpikeRule::default().drop(t);
-    if spikes > 0 {
-        warnings.push(format!(
-            "{spikes} single-frame jumps of a knee or foot keypoint dropped (bridged)"
-        ));
-    }
-}
-
-/// A heel or toe drawn where the foot cannot be (too near or too far from its ankle) moves
-/// the events as a spike does, over a frame or two. Side views only: in a front or back view
-/// the foot turns out of the image plane and its image shrinks.
-fn drop_misplaced_feet(t: &mut Tracks, view: View, warnings: &mut Vec<String>) {
-    if view.is_frontal() {
-        return;
-    }
-    let dropped = foot_shape::FootShapeRule::default().drop(t);
-    if dropped > 0 {
-        warnings.push(format!(
-            "{dropped} heel or toe keypoints dropped (bridged) where the foot's distance from its ankle was implausible"
-        ));
+    let feet = foot_shape::FootShapeRule::default().drop(t);
+    for (n, what) in [
+        (spikes, "single-frame jumps of a knee or foot keypoint"),
+        (
+            feet,
+            "heel or toe keypoints too near or too far from their ankle",
+        ),
+    ] {
+        if n > 0 {
+            warnings.push(format!("{n} {what} dropped (bridged)"));
+        }
     }
 }
 

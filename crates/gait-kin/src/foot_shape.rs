@@ -85,10 +85,7 @@ impl FootShapeRule {
     /// Drops the misplaced heels and toes of `t` (x and y to NaN); returns how many.
     pub fn drop(&self, t: &mut Tracks) -> usize {
         let found = self.find(t);
-        for &(j, i) in &found {
-            t.x[j][i] = f64::NAN;
-            t.y[j][i] = f64::NAN;
-        }
+        t.drop_points(&found);
         found.len()
     }
 }

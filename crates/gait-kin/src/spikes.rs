@@ -73,10 +73,7 @@ impl SpikeRule {
     /// Drops the spikes of `t` (x and y to NaN); returns how many.
     pub fn drop(&self, t: &mut Tracks) -> usize {
         let spikes = self.find(t);
-        for &(j, i) in &spikes {
-            t.x[j][i] = f64::NAN;
-            t.y[j][i] = f64::NAN;
-        }
+        t.drop_points(&spikes);
         spikes.len()
     }
 }

@@ -113,6 +113,14 @@ impl Tracks {
         (x.is_finite() && y.is_finite()).then_some((x, y))
     }
 
+    /// Removes the points `(keypoint, frame)` (x and y to NaN), for the gap filler to bridge.
+    pub fn drop_points(&mut self, points: &[(usize, usize)]) {
+        for &(j, i) in points {
+            self.x[j][i] = f64::NAN;
+            self.y[j][i] = f64::NAN;
+        }
+    }
+
     /// Pelvis position: `mid_hip`, else the mean of the two hips.
     pub fn pelvis(&self, i: usize) -> Option<(f64, f64)> {
         if let Some(p) = self.index("mid_hip").and_then(|j| self.at(j, i)) {
