@@ -76,11 +76,12 @@ def _row_name():
     return "S01_1_left_sports2d-demo"
 
 
-def write_study(gait, path, rows):
-    """A study file of `rows` rows of the script's pipeline (sessions 1, 2, ...)."""
+def write_study(gait, path, rows, row_sets=lambda r: []):
+    """A study file of `rows` rows of the script's pipeline (sessions 1, 2, ...), each with
+    `row_sets(r)` added to its `set` column."""
     lines = ["video,subject,session,view,prosthetic_side,config,set"]
     for r in range(rows):
-        sets = gait.study_sets().replace('"', '""')
+        sets = ";".join([gait.study_sets(), *row_sets(r)]).replace('"', '""')
         lines.append(f'{runs.SAMPLE},S01,{r + 1},left,,,"{sets}"')
     path.write_text("\n".join(lines) + "\n")
     return path

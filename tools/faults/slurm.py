@@ -5,7 +5,9 @@ itself (`gait batch --wait` exits 0) with every row the undisturbed run's result
 import json
 import os
 import socket
+import shutil
 import subprocess
+import sys
 import time
 
 import races
@@ -40,11 +42,43 @@ def _nudge(job):
             _scontrol("update", f"jobid={t}", "starttime=now")
 
 
-def run(gait, ref, work, events, quick, log):
+def _row_sets(r):
+    """Each row its own seed: rows of one pipeline would share every cache entry, so the
+    regeneration could end (and the tasks with nothing left to interrupt) before the last event."""
+    return [f"regenerator.seed={r + 1}"]
+
+
+def _references(gait, work, n_rows):
+    """Each row's undisturbed run, outside Slurm, side by side."""
+    refs = [work / f"undisturbed-slurm-{r + 1}" for r in range(n_rows)]
+    procs = []
+    for r, ref in enumerate(refs):
+        shutil.rmtree(ref, ignore_errors=True)
+        procs.append(gait.start(ref, _row_sets(r)))
+    for p in procs:
+        if p.wait() != 0:
+            sys.exit(f"inject: an undisturbed run failed: {p.stderr.read().decode()[-500:]}")
+    return refs
+
+
+def _warn(task):
+    """Slurm's time-limit warning to a task's batch shell. A task between states (just started
+    or requeued) answers "Job can not be altered now, try again later": so it is tried again."""
+    for _ in range(50):
+        sent = subprocess.run(["scancel", "--signal=USR1", "--batch", task], capture_output=True, text=True)
+        if sent.returncode == 0 or task not in _running(task.split("_")[0]):
+            return
+        time.sleep(0.2)
+
+
+def run(gait, work, events, quick, log):
     """A study of `events + 1` rows on Slurm; `events` faults, alternating node-down and
-    time-limit warnings, each while a task runs and has made progress since the last."""
+    time-limit warnings, each while a task runs, has made progress since the last and still has
+    frames to redraw (so the fault interrupts work and the task must requeue)."""
     n_rows = events + 1
-    study = races.write_study(gait, work / "slurm-study.csv", n_rows)
+    refs = _references(gait, work, n_rows)
+    study = races.write_study(gait, work / "slurm-study.csv", n_rows, _row_sets)
+    total = n_rows * gait.frames
     out = work / "slurm"
     batch = subprocess.Popen(
         races.batch_args(gait, study, out, ["--executor", "slurm", "--wait"]),
@@ -60,16 +94,17 @@ def run(gait, ref, work, events, quick, log):
         # Some progress first, so the fault interrupts work (a new entry since the last event).
         before = runs.count(out / "cache", "regenerator")
         hit = runs.wait_for(
-            lambda: _running(job) and runs.count(out / "cache", "regenerator") > before,
+            lambda: _running(job) and before < runs.count(out / "cache", "regenerator") < total,
             batch, timeout=600, every=0.2,
         )
-        row = {"event": kind, "tasks_running": _running(job)}
+        row = {"event": kind, "tasks_running": _running(job), "redrawn": runs.count(out / "cache", "regenerator")}
         restarts_before = _restarts(job)
         if not hit:
+            done = runs.count(out / "cache", "regenerator")
             row["ok"] = False
-            row["why"] = "no task was running"
+            row["why"] = f"no task was redrawing frames ({done} of {total} redrawn, batch exit {batch.poll()})"
             rows.append(row)
-            log(f"slurm {i + 1}/{events}: {kind}: FAILED, no task was running")
+            log(f"slurm {i + 1}/{events}: {kind}: FAILED, {row['why']}")
             continue
         if kind == "node down":
             _scontrol("update", f"nodename={node}", "state=down", "reason=fault-injection")
@@ -77,7 +112,7 @@ def run(gait, ref, work, events, quick, log):
             _scontrol("update", f"nodename={node}", "state=resume")
         else:
             for t in row["tasks_running"]:
-                subprocess.run(["scancel", "--signal=USR1", "--batch", t], check=False)
+                _warn(t)
         # Requeued: Restarts grows and the tasks that ran are pending again. Waited for as such:
         # the array's tasks that have not started yet are pending too, so "a task is pending"
         # said nothing, and on a slow machine a task's own requeue (after its frame in flight)
@@ -95,7 +130,7 @@ def run(gait, ref, work, events, quick, log):
             _nudge(job)
         row["ok"] = row["restarts"] > 0
         log(f"slurm {i + 1}/{events}: {kind} while {' '.join(row['tasks_running'])} ran: "
-            f"requeued (restarts {row['restarts']})")
+            f"{row['redrawn']} of {total} frames redrawn, requeued (restarts {row['restarts']})")
         rows.append(row)
     end = time.monotonic() + 1800
     while batch.poll() is None and time.monotonic() < end:
@@ -104,7 +139,7 @@ def run(gait, ref, work, events, quick, log):
         time.sleep(2)
     code = batch.wait()
     names = [f"S01_{r + 1}_left_sports2d-demo" for r in range(n_rows)]
-    diffs = {n: runs.differences(ref, out / "runs" / n) for n in names}
+    diffs = {n: runs.differences(ref, out / "runs" / n) for n, ref in zip(names, refs)}
     bad = runs.bad_entries(out / "cache")
     finished = code == 0 and not any(diffs.values()) and not bad
     for row in rows:
