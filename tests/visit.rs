@@ -8,9 +8,11 @@
 
 mod common;
 
+#[path = "../crates/gait-kin/tests/jitter/mod.rs"]
+mod jitter;
 #[path = "../crates/gait-kin/tests/rng/mod.rs"]
 mod rng;
-use rng::Rng;
+use jitter::Jitter;
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -390,29 +392,13 @@ fn progress_between_two_halves_of_one_walk_calls_no_change() {
     assert!(judged >= 6, "only {judged} items judged: {rows:?}");
 }
 
-/// A case's four views as 30 fps videos (every 5th frame) with BlazePose-level jitter: 1 px
-/// per 100 px of leg on every keypoint (measured on the sample, see
-/// crates/gait-kin/tests/frontal_mocap.rs).
+/// A case's four views as 30 fps videos (every 5th frame) with BlazePose's jitter as measured
+/// on the sample (crates/gait-kin/tests/jitter).
 fn noisy_copy(case: &Path, to: &Path, seed: u64) {
     for view in VIEWS {
         let f = std::fs::File::open(case.join(view).join("keypoints.csv")).unwrap();
         let seq = gait_core::dlc::read(f, None, 150.0).unwrap();
-        let mut rng = Rng::seeded(seed);
-        let mut out = seq.clone();
-        out.poses = seq.poses.iter().step_by(5).cloned().collect();
-        out.frames = (0..out.poses.len()).collect();
-        out.fps = 30.0;
-        let idx = |n: &str| seq.names.iter().position(|m| m == n).unwrap();
-        let [h, k, a] = ["left_hip", "left_knee", "left_ankle"].map(idx);
-        for pose in &mut out.poses {
-            let kp = &pose.keypoints;
-            let d = |i: usize, j: usize| (kp[i].x - kp[j].x).hypot(kp[i].y - kp[j].y);
-            let sigma = (d(h, k) + d(k, a)) / 100.0;
-            for p in &mut pose.keypoints {
-                p.x += sigma * rng.normal();
-                p.y += sigma * rng.normal();
-            }
-        }
+        let out = jitter::as_video(&seq, seed, Jitter::Measured);
         std::fs::create_dir_all(to.join(view)).unwrap();
         let w = std::fs::File::create(to.join(view).join("keypoints.csv")).unwrap();
         gait_core::dlc::write(w, "noisy", &out).unwrap();
