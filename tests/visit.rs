@@ -408,7 +408,7 @@ fn noisy_copy(case: &Path, to: &Path, seed: u64) {
 /// The larger planted deviations as 30 fps videos with pose-model jitter (3 seeds): each is found
 /// on the right in every seed (a 10 % shorter stance and the whip in 2 of 3) and nothing on the
 /// left; what else the jitter adds on the right
-/// (hip hiking on the Parkinson's narrow hips, circumduction) is printed (BENCHMARKS.md).
+/// (circumduction in 3 of 60 visits) is printed (BENCHMARKS.md).
 #[test]
 fn planted_deviations_under_pose_model_noise() {
     let data = planted();
