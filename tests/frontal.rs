@@ -111,3 +111,70 @@ fn a_declared_view_the_keypoints_contradict_is_named() {
     );
     assert!(dir.path().join("b/frontal_angles.csv").is_file());
 }
+
+/// A real front view through the whole pipeline: the man on the box, facing the camera in the
+/// sample's first 96 frames (tests/data/man-facing-camera). Jumping jacks, no walk: the view is
+/// decided from the keypoints, both hips read abducted where his legs are apart (annotated by
+/// eye), near neutral where they are together, and the pelvis level while he jumps.
+#[test]
+fn a_real_front_view_the_man_on_the_box() {
+    let dir = tempfile::tempdir().unwrap();
+    let clip = dir.path().join("man.mp4");
+    let made = std::process::Command::new("ffmpeg")
+        .args(["-loglevel", "error", "-y", "-i"])
+        .arg(common::sample_video())
+        .args([
+            "-vf",
+            "crop=500:560:450:0",
+            "-frames:v",
+            "96",
+            "-c:v",
+            "libx264",
+        ])
+        .args(["-crf", "0", "-pix_fmt", "yuv444p"])
+        .arg(&clip)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let out = dir.path().join("run");
+    let o = run_ok(&mut common::run_on(&clip, &out));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("no walking bout found"), "{stderr}");
+    let view = std::fs::read_to_string(out.join("frontal_view.csv")).unwrap();
+    assert!(
+        view.lines().nth(1).unwrap().starts_with("anterior,auto,"),
+        "{view}"
+    );
+
+    let table = std::fs::read_to_string(out.join("frontal_angles.csv")).unwrap();
+    let mut lines = table.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let at = |frame: usize, name: &str| rows[frame][col(name)];
+    let legs = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/man-facing-camera/legs.csv"),
+    )
+    .unwrap();
+    for line in legs.lines().skip(1) {
+        let (frame, legs) = line.split_once(',').unwrap();
+        let frame: usize = frame.parse().unwrap();
+        assert_eq!(rows[frame][0] as usize, frame);
+        for side in ["left", "right"] {
+            let a = at(frame, &format!("{side}_hip_adduction"));
+            match legs {
+                "apart" => assert!(a <= -12.0, "frame {frame} {side}: {a:.1} with legs apart"),
+                _ => assert!((-9.0..=8.0).contains(&a), "frame {frame} {side}: {a:.1}"),
+            }
+        }
+    }
+    let obliquity = col("left_pelvic_obliquity");
+    let worst = rows.iter().map(|r| r[obliquity].abs()).fold(0.0, f64::max);
+    assert!(worst <= 5.0, "pelvic obliquity up to {worst:.1} deg");
+}
