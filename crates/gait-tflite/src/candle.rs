@@ -4,6 +4,7 @@
 //! once at compile time and their activations fused.
 
 mod compile;
+mod fold;
 mod step;
 
 use candle_core::{Device, Tensor};
@@ -30,7 +31,8 @@ pub struct CandleGraph {
 impl CandleGraph {
     /// Compiles `graph`; fails on operators or layouts it cannot run.
     pub fn new(graph: &Graph) -> R<Self> {
-        let (mut nodes, values) = compile::nodes(graph)?;
+        let (nodes, values) = compile::nodes(graph)?;
+        let mut nodes = fold::pads_into_windows(nodes, &graph.outputs);
         let consts = constant_tensors(graph, values)?;
         let input = *graph.inputs.first().ok_or("graph has no input")?;
         mark_last_uses(&mut nodes, &consts, &graph.outputs);
