@@ -284,10 +284,17 @@ mod tests {
             let m = inverse_map(rect, 256).unwrap();
             let mut row = vec![(0, 0); 256];
             for y in [0, 1, 63, 64, 200, 255] {
+                let want: Vec<_> = (0..256).map(|x| grid_point(&m, x, y)).collect();
                 grid_row(&m, y, &mut row);
-                for (x, &g) in row.iter().enumerate() {
-                    assert_eq!(g, grid_point(&m, x, y), "rotation {rotation}, ({x}, {y})");
+                assert_eq!(row, want, "rotation {rotation}, row {y}");
+                // Each variant this CPU can run, not only the one it dispatches to.
+                #[cfg(target_arch = "x86_64")]
+                if is_x86_feature_detected!("avx2") {
+                    unsafe { grid_row_avx2(&m, y, &mut row) };
+                    assert_eq!(row, want, "AVX2, rotation {rotation}, row {y}");
                 }
+                grid_row_plain(&m, y, &mut row);
+                assert_eq!(row, want, "plain, rotation {rotation}, row {y}");
             }
         }
     }
