@@ -290,6 +290,7 @@ mod tests {
                 // Each variant this CPU can run, not only the one it dispatches to.
                 #[cfg(target_arch = "x86_64")]
                 if is_x86_feature_detected!("avx2") {
+                    // SAFETY: the CPU has AVX2, checked just above.
                     unsafe { grid_row_avx2(&m, y, &mut row) };
                     assert_eq!(row, want, "AVX2, rotation {rotation}, row {y}");
                 }
