@@ -207,8 +207,9 @@ fn inside(src: &[u8], w: i64, h: i64, gx: i64, gy: i64) -> Option<[u8; 3]> {
     Some(v)
 }
 
-/// Bilinear sample at a 1/32-pixel grid point, fixed point as OpenCV's
-/// `remapBilinear` on 8-bit images (weights sum to 2^15).
+/// Bilinear sample at a 1/32-pixel grid point with taps outside the image, fixed point as
+/// OpenCV's `remapBilinear` on 8-bit images (weights sum to 2^15), `border` deciding what lies
+/// outside; [`inside`] takes the pixels whose taps all fall inside.
 fn sample(img: &RgbImage, gx: i64, gy: i64, border: Border) -> [u8; 3] {
     let (w, h) = (img.width() as i64, img.height() as i64);
     let (ix, iy) = (gx >> 5, gy >> 5);
@@ -221,18 +222,6 @@ fn sample(img: &RgbImage, gx: i64, gy: i64, border: Border) -> [u8; 3] {
     ];
     let taps = [(ix, iy), (ix + 1, iy), (ix, iy + 1), (ix + 1, iy + 1)];
     let src = img.as_raw();
-    if ix >= 0 && iy >= 0 && ix + 1 < w && iy + 1 < h {
-        // All four taps inside (nearly every pixel of a crop): no border rule.
-        let i = ((iy * w + ix) * 3) as usize;
-        let j = i + (w * 3) as usize;
-        return std::array::from_fn(|c| {
-            let v = wts[0] * src[i + c] as i64
-                + wts[1] * src[i + 3 + c] as i64
-                + wts[2] * src[j + c] as i64
-                + wts[3] * src[j + 3 + c] as i64;
-            ((v + (1 << 14)) >> 15).clamp(0, 255) as u8
-        });
-    }
     let mut acc = [0i64; 3];
     for (&(tx, ty), &wt) in taps.iter().zip(&wts) {
         let inside = tx >= 0 && ty >= 0 && tx < w && ty < h;
