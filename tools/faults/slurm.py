@@ -56,8 +56,9 @@ def _references(gait, work, n_rows):
         shutil.rmtree(ref, ignore_errors=True)
         procs.append(gait.start(ref, _row_sets(r)))
     for p in procs:
-        if p.wait() != 0:
-            sys.exit(f"inject: an undisturbed run failed: {p.stderr.read().decode()[-500:]}")
+        _, err = p.communicate()
+        if p.returncode != 0:
+            sys.exit(f"inject: an undisturbed run failed: {err.decode()[-500:]}")
     return refs
 
 
@@ -100,9 +101,9 @@ def run(gait, work, events, quick, log):
         row = {"event": kind, "tasks_running": _running(job), "redrawn": runs.count(out / "cache", "regenerator")}
         restarts_before = _restarts(job)
         if not hit:
-            done = runs.count(out / "cache", "regenerator")
             row["ok"] = False
-            row["why"] = f"no task was redrawing frames ({done} of {total} redrawn, batch exit {batch.poll()})"
+            row["why"] = (f"no task was redrawing frames ({row['redrawn']} of {total} redrawn, "
+                          f"batch exit {batch.poll()})")
             rows.append(row)
             log(f"slurm {i + 1}/{events}: {kind}: FAILED, {row['why']}")
             continue
