@@ -74,17 +74,48 @@ fn ffmpeg_command(path: &Path, req: Request) -> Command {
 /// A running ffmpeg.
 struct Ffmpeg {
     child: Child,
+    frames: Box<dyn Read + Send>,
     messages: Option<JoinHandle<String>>,
+}
+
+/// The channel ffmpeg writes its frames to: the child's end and ours.
+///
+/// On Unix a socket pair, not a pipe: a pipe's writer and reader take one lock per 32 KiB
+/// written or read and spin on it while the other copies, and each 4 KiB of a pipe is a page
+/// allocated and freed. The socket hands over whole buffers and each end locks only its own
+/// side: on the sample, 230 frames of 1768 x 994 cost 1.8-1.9 CPU s through a socket against
+/// 2.2-2.6 through a pipe, the same bytes (BENCHMARKS.md, issue 40).
+fn frame_channel() -> std::io::Result<(Stdio, Option<Box<dyn Read + Send>>)> {
+    #[cfg(unix)]
+    {
+        let (ours, theirs) = std::os::unix::net::UnixStream::pair()?;
+        Ok((Stdio::from(std::os::fd::OwnedFd::from(theirs)), Some(Box::new(ours))))
+    }
+    #[cfg(not(unix))]
+    {
+        Ok((Stdio::piped(), None))
+    }
 }
 
 impl Ffmpeg {
     fn spawn(path: &Path, req: Request) -> Result<Self, PipelineError> {
-        let mut child = ffmpeg_command(path, req)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
+        let (stdout, ours) = frame_channel().map_err(|e| PipelineError::input(path, e))?;
+        let mut cmd = ffmpeg_command(path, req);
+        cmd.stdin(Stdio::null()).stdout(stdout).stderr(Stdio::piped());
+        let mut child = cmd
             .spawn()
             .map_err(|e| crate::input::ffmpeg_missing(path, e))?;
+        // The child holds its end now; ours must be the only one left, or the reader would
+        // never see the end of the output.
+        drop(cmd);
+        let frames = match (ours, child.stdout.take()) {
+            (Some(frames), _) => frames,
+            (None, Some(piped)) => Box::new(piped) as Box<dyn Read + Send>,
+            (None, None) => {
+                let _ = child.kill();
+                return Err(PipelineError::input(path, "ffmpeg has no output"));
+            }
+        };
         let messages = child.stderr.take().map(|mut stderr| {
             std::thread::spawn(move || {
                 let mut kept = Vec::new();
@@ -96,13 +127,17 @@ impl Ffmpeg {
                 String::from_utf8_lossy(&kept).into_owned()
             })
         });
-        Ok(Ffmpeg { child, messages })
+        Ok(Ffmpeg {
+            child,
+            frames,
+            messages,
+        })
     }
 }
 
 impl FrameSource for Ffmpeg {
     fn output(&mut self) -> Option<&mut dyn Read> {
-        self.child.stdout.as_mut().map(|s| s as &mut dyn Read)
+        Some(&mut *self.frames)
     }
 
     fn end(&mut self) -> std::io::Result<Ending> {
