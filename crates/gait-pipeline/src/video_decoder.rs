@@ -89,7 +89,10 @@ fn frame_channel() -> std::io::Result<(Stdio, Option<Box<dyn Read + Send>>)> {
     #[cfg(unix)]
     {
         let (ours, theirs) = std::os::unix::net::UnixStream::pair()?;
-        Ok((Stdio::from(std::os::fd::OwnedFd::from(theirs)), Some(Box::new(ours))))
+        Ok((
+            Stdio::from(std::os::fd::OwnedFd::from(theirs)),
+            Some(Box::new(ours)),
+        ))
     }
     #[cfg(not(unix))]
     {
@@ -101,7 +104,9 @@ impl Ffmpeg {
     fn spawn(path: &Path, req: Request) -> Result<Self, PipelineError> {
         let (stdout, ours) = frame_channel().map_err(|e| PipelineError::input(path, e))?;
         let mut cmd = ffmpeg_command(path, req);
-        cmd.stdin(Stdio::null()).stdout(stdout).stderr(Stdio::piped());
+        cmd.stdin(Stdio::null())
+            .stdout(stdout)
+            .stderr(Stdio::piped());
         let mut child = cmd
             .spawn()
             .map_err(|e| crate::input::ffmpeg_missing(path, e))?;

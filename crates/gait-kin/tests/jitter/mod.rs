@@ -20,9 +20,29 @@ pub enum Jitter {
 /// hips and shoulders (0.9-1.2 at the hips, 0.5-0.8 vertically at the shoulders). The two hips'
 /// vertical jitter is shared: their residuals correlate +0.90 (side) and +0.92 (front), so the
 /// hip line's height difference jitters by 0.39-0.49 px per 100 px of leg, not the 1.4 of two
-/// independent hips; the shoulders' correlate +0.56 and +0.49. Knees and feet show more, but
-/// there the fit leaves real motion in the residuals.
+/// independent hips; the shoulders' correlate +0.56 and +0.49. Knees and feet: [`part_scale`].
 const NOISE_PER_100_LEG_PX: f64 = 1.0;
+/// The knees' and feet's jitter as a multiple of the hips'. The tests run with 1: the level the
+/// hips show. In stance, where a foot stands still, BlazePose's knees and feet jitter more
+/// (`tools/frontal/measure_stance_jitter.py`: knees 1.2-2.0, feet 1.3-3.4, median about 2 per
+/// 100 px of leg on the sample and three re-encodings; BENCHMARKS.md, "Knees and feet"): the
+/// figures under that level are measured with `GAIT_TEST_KNEE_JITTER=1.5
+/// GAIT_TEST_FEET_JITTER=2` and reported there, not asserted (they do not hold).
+fn part_scale(name: &str) -> f64 {
+    let env = |var: &str| {
+        std::env::var(var)
+            .ok()
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(1.0)
+    };
+    if name.ends_with("knee") {
+        env("GAIT_TEST_KNEE_JITTER")
+    } else if ["ankle", "heel", "toe"].iter().any(|p| name.ends_with(p)) {
+        env("GAIT_TEST_FEET_JITTER")
+    } else {
+        1.0
+    }
+}
 /// Correlation of a left/right pair's vertical jitter (measured above, rounded); other pairs
 /// and all horizontal jitter are drawn independently.
 const PAIR_Y_CORRELATION: [(&str, f64); 2] = [("hip", 0.9), ("shoulder", 0.5)];
@@ -69,9 +89,16 @@ pub fn as_video(seq: &PoseSequence, seed: u64, model: Jitter) -> PoseSequence {
                 b * draws[l].1 + a * draws[r].1,
             );
         }
-        for ((p, d), dy) in pose.keypoints.iter_mut().zip(&draws).zip(dy) {
-            p.x += sigma * d.0;
-            p.y += sigma * dy;
+        for (((p, d), dy), name) in pose
+            .keypoints
+            .iter_mut()
+            .zip(&draws)
+            .zip(dy)
+            .zip(&seq.names)
+        {
+            let s = sigma * part_scale(name);
+            p.x += s * d.0;
+            p.y += s * dy;
         }
     }
     out
