@@ -35,6 +35,11 @@ fn rises(run: &RunFiles, side: Side) -> Vec<Sample> {
                 (to + 0.25 * swing).ceil() as usize,
                 (to + 0.5 * swing) as usize,
             );
+            // A swing of a few frames (a toe-off found late on jittered feet) has no frame in
+            // its 25-50 %: no sample, rather than an empty range.
+            if a > b {
+                return None;
+            }
             // The other heel's ground: its lowest point over the 30 % of the stride before the
             // window, where it lands and is flat. Not the whole stride's: walking obliquely to
             // the camera the ground line itself moves up or down the image.
@@ -89,4 +94,41 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
         let none = "no accepted stride of this side with its toe-off and the other heel";
         judge(VAULTING, side, &samples, t, "% leg", none)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::run_files::Stride;
+
+    /// Strides of `len` frames with toe-off at `toe_off` of them, heels flat on the floor.
+    fn run(len: usize, toe_off: f64) -> RunFiles {
+        let mut r = RunFiles {
+            view: "sagittal".into(),
+            ..Default::default()
+        };
+        for side in Side::BOTH {
+            r.strides.push(Stride {
+                side,
+                first: 0,
+                last: len,
+                toe_off: Some(toe_off),
+                leg_px: 100.0,
+            });
+            r.heel_y.insert(side, (0..=len).map(|i| (i, 900.0)).collect());
+        }
+        r
+    }
+
+    #[test]
+    fn a_swing_too_short_for_its_window_gives_no_sample() {
+        // 25-50 % of a 1-frame swing (frames 32-33) holds no whole frame: 33 > 32 (this
+        // panicked on jittered feet before).
+        assert!(rises(&run(33, 32.0 / 33.0), Side::Left).is_empty());
+        let [left, _] = assess(&run(33, 32.0 / 33.0), &ChecklistConfig::default());
+        assert_eq!(left.status, crate::Status::NotAssessable);
+        // A usual stride: one sample a side, the heels did not rise.
+        let rises = rises(&run(100, 0.6), Side::Left);
+        assert!(rises.len() == 1 && rises[0].value == 0.0, "{rises:?}");
+    }
 }
