@@ -115,7 +115,8 @@ mod tests {
                 toe_off: Some(toe_off),
                 leg_px: 100.0,
             });
-            r.heel_y.insert(side, (0..=len).map(|i| (i, 900.0)).collect());
+            r.heel_y
+                .insert(side, (0..=len).map(|i| (i, 900.0)).collect());
         }
         r
     }
