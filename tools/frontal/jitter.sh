@@ -18,4 +18,7 @@ rm -rf "$work/run"
 target/debug/gait run --no-progress --input "$work/man-facing-camera.mp4" --out "$work/run" \
     --set report.overlay=false --set report.pdf=false >/dev/null 2>&1 || true
 python3 tools/frontal/measure_jitter.py tests/data/sample-blazepose/keypoints.csv 127 158
+# Knees and feet, where they stand still: the walker's stances between her manual events.
+python3 tools/frontal/measure_stance_jitter.py tests/data/sample-blazepose/keypoints.csv \
+    tests/data/sample-events/events.csv
 python3 tools/frontal/measure_jitter.py "$work/run/keypoints.csv" 0 95

@@ -16,23 +16,22 @@ import sys
 HALF = 4  # 9-frame window
 
 
-def _weights():
-    """Central weights of a least-squares quadratic over -HALF..HALF (Savitzky-Golay)."""
-    n = 2 * HALF + 1
-    s2 = sum(t * t for t in range(-HALF, HALF + 1))
-    s4 = sum(t ** 4 for t in range(-HALF, HALF + 1))
+def weights(half):
+    """Central weights of a least-squares quadratic over -half..half (Savitzky-Golay)."""
+    n = 2 * half + 1
+    s2 = sum(t * t for t in range(-half, half + 1))
+    s4 = sum(t ** 4 for t in range(-half, half + 1))
     det = n * s4 - s2 * s2
-    return [(s4 - s2 * t * t) / det for t in range(-HALF, HALF + 1)]
+    return [(s4 - s2 * t * t) / det for t in range(-half, half + 1)]
 
 
-W = _weights()
-
-
-def residuals(x):
-    scale = math.sqrt(1 - W[HALF])
+def residuals(x, half=HALF):
+    """x less its local quadratic fit, scaled to the white noise it implies."""
+    w = weights(half)
+    scale = math.sqrt(1 - w[half])
     return [
-        (x[i] - sum(w * x[i - HALF + k] for k, w in enumerate(W))) / scale
-        for i in range(HALF, len(x) - HALF)
+        (x[i] - sum(c * x[i - half + k] for k, c in enumerate(w))) / scale
+        for i in range(half, len(x) - half)
     ]
 
 

@@ -15,31 +15,15 @@ them (crates/gait-kin/tests/jitter).
 Pure Python (no numpy) so it runs wherever tools/test.sh does."""
 import csv
 import math
+import pathlib
 import statistics
 import sys
 
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from measure_jitter import residuals  # noqa: E402
+
 HALF = 3  # 7-frame window: a stance at 30 fps is 18-21 frames
 PARTS = ["hip", "knee", "ankle", "heel", "toe"]
-
-
-def _weights():
-    """Central weights of a least-squares quadratic over -HALF..HALF (Savitzky-Golay)."""
-    n = 2 * HALF + 1
-    s2 = sum(t * t for t in range(-HALF, HALF + 1))
-    s4 = sum(t ** 4 for t in range(-HALF, HALF + 1))
-    det = n * s4 - s2 * s2
-    return [(s4 - s2 * t * t) / det for t in range(-HALF, HALF + 1)]
-
-
-W = _weights()
-
-
-def residuals(x):
-    scale = math.sqrt(1 - W[HALF])
-    return [
-        (x[i] - sum(w * x[i - HALF + k] for k, w in enumerate(W))) / scale
-        for i in range(HALF, len(x) - HALF)
-    ]
 
 
 def robust_sd(r):
@@ -88,7 +72,7 @@ def main():
             for c in "xy":
                 x = [val(f, f"{pick[f]}_{p}", c) for f in frames]
                 if not any(math.isnan(v) for v in x):
-                    res[(p, c)].extend(residuals(x))
+                    res[(p, c)].extend(residuals(x, HALF))
     for p in PARTS:
         for c in "xy":
             r = res[(p, c)]
