@@ -354,6 +354,53 @@ mod tests {
         assert!(err.contains("moov atom not found"), "{err}");
     }
 
+    /// A clean clip of `seconds` at 30 fps, 64 x 48 (H.264).
+    fn clip(dir: &std::path::Path, seconds: u32) -> std::path::PathBuf {
+        let path = dir.join("clip.mp4");
+        let status = std::process::Command::new("ffmpeg")
+            .args(["-v", "error", "-y", "-f", "lavfi", "-i"])
+            .arg(format!("testsrc=size=64x48:rate=30:duration={seconds}"))
+            .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
+            .arg(&path)
+            .status()
+            .expect("ffmpeg (tools/setup.sh installs it)");
+        assert!(status.success());
+        path
+    }
+
+    #[test]
+    fn frames_over_the_socket_are_the_bytes_ffmpeg_writes() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = clip(dir.path(), 2);
+        // ffmpeg's standard output collected whole (a pipe), against the reader (a socket).
+        let recorded = super::DecoderRecording::record(&path).unwrap();
+        assert!(recorded.success && recorded.frames.len() == 60 * 64 * 48 * 3);
+        let mut frames = InputInfo::open(&path).unwrap().frames().unwrap();
+        let mut read = Vec::new();
+        while let Some(f) = frames.next_frame().unwrap() {
+            read.extend_from_slice(f.image.as_raw());
+        }
+        assert!(read == recorded.frames);
+    }
+
+    #[test]
+    fn a_reader_left_early_ends_its_decoder() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = clip(dir.path(), 100);
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let mut frames = InputInfo::open(&path).unwrap().frames().unwrap();
+            let first = frames.next_frame().unwrap().map(|f| f.index);
+            drop(frames);
+            let _ = tx.send(first);
+        });
+        // ffmpeg, with 3000 frames still to write, is stopped when the reader goes.
+        let first = rx
+            .recv_timeout(Duration::from_secs(600))
+            .expect("leaving a decoder early hung");
+        assert_eq!(first, Some(0));
+    }
+
     #[test]
     fn a_damaged_video_full_of_decoder_errors_ends() {
         let dir = tempfile::tempdir().unwrap();
