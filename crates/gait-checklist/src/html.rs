@@ -17,6 +17,19 @@ fn num(v: f64) -> String {
     }
 }
 
+/// How many cycles or steps a judged verdict rests on. A finding from one is flagged: the pose
+/// model's foot jitter alone put a healthy stride past the whip threshold in 4 of 20
+/// (BENCHMARKS.md, "Knees and feet"), and one value shows no consistency.
+fn count(v: &Verdict) -> String {
+    match (v.status, v.n) {
+        (Status::NotAssessable, _) | (_, 0) => String::new(),
+        (Status::Present, 1) => {
+            "<br><small>n = 1: one value, confirm on a longer walk</small>".into()
+        }
+        (_, n) => format!("<br><small>n = {n}</small>"),
+    }
+}
+
 impl Checklist {
     /// The report section: one row per item with both sides, present items first.
     pub fn html(&self) -> String {
@@ -118,7 +131,7 @@ impl Checklist {
                 (m, s) if s.is_empty() => format!("<br>{m} {}", v.unit),
                 (m, s) => format!("<br>{m} ± {s} {}", v.unit),
             };
-            format!("<td>{verdict}{value}</td>")
+            format!("<td>{verdict}{value}{}</td>", count(v))
         };
         // The threshold and its source from the present side, else the first judged one.
         let (_, lead) = pair
@@ -190,5 +203,58 @@ impl Checklist {
             },
             cycles.join("<br>"),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::judge::{Sample, Threshold, judge};
+    use crate::whip::WHIP;
+
+    fn verdict(side: Side, values: &[f64]) -> Verdict {
+        let samples: Vec<Sample> = (values.iter().enumerate())
+            .map(|(i, &value)| Sample {
+                value,
+                first: 40 * i,
+                frame: 40 * i + 30,
+            })
+            .collect();
+        let t = Threshold {
+            value: 5.0,
+            beyond: "above",
+            source: "test".into(),
+        };
+        judge(WHIP, side, &samples, t, "% leg", "none")
+    }
+
+    #[test]
+    fn each_cell_says_how_many_values_and_a_finding_from_one_says_so() {
+        let c = Checklist {
+            view: "posterior".into(),
+            prosthetic: None,
+            amputation: None,
+            verdicts: vec![
+                verdict(Side::Left, &[1.0, 2.0, 1.5]),
+                verdict(Side::Right, &[6.0]),
+            ],
+        };
+        assert_eq!(c.verdicts[1].status, Status::Present);
+        let html = c.html();
+        assert!(html.contains("<small>n = 3</small>"), "{html}");
+        assert!(
+            html.contains("n = 1: one value, confirm on a longer walk"),
+            "{html}"
+        );
+        // Two values past the threshold: a count, no caution.
+        let c = Checklist {
+            verdicts: vec![verdict(Side::Right, &[6.0, 7.0])],
+            ..c
+        };
+        let html = c.html();
+        assert!(
+            html.contains("<small>n = 2</small>") && !html.contains("one value"),
+            "{html}"
+        );
     }
 }
