@@ -335,9 +335,9 @@ fn frontal_figures_hold_under_pose_model_noise() {
                 ..KinematicsConfig::default()
             };
             let seq = case.sequence();
-            for kind in [Jitter::Measured, Jitter::Independent] {
+            for kind in [Jitter::Measured, Jitter::MeasuredLimbs, Jitter::Independent] {
                 let model = format!("{kind:?}").to_lowercase();
-                let (mut held, mut angles_held) = (0, 0);
+                let (mut held, mut angles_held, mut with_cycles_held, mut lost) = (0, 0, 0, 0);
                 for seed in 1..=10u64 {
                     let noisy = jitter::as_video(&seq, seed, kind);
                     let r = analyse(&noisy, &PostprocessConfig::default(), &kin).expect("analysis");
@@ -365,6 +365,11 @@ fn frontal_figures_hold_under_pose_model_noise() {
                     }
                     let maes = noisy_maes(&case, &r);
                     angles_held += usize::from(maes.iter().all(|(_, mae, limit)| mae <= limit));
+                    // A side without an accepted cycle has no angles to judge (its MAE is
+                    // infinite): counted apart, as a failure of the events, not of the angles.
+                    let judged = maes.iter().filter(|(_, mae, _)| mae.is_finite());
+                    with_cycles_held += usize::from(judged.clone().all(|(_, m, l)| m <= l));
+                    lost += usize::from(maes.iter().any(|(_, mae, _)| mae.is_infinite()));
                     for (what, mae, limit) in &maes {
                         if mae > limit {
                             problems.push(format!("{what} MAE {mae:.2}"));
@@ -388,23 +393,32 @@ fn frontal_figures_hold_under_pose_model_noise() {
                 }
                 println!(
                     "SUMMARY {name} ({model} jitter): the figures held in {held} of 10 seeds, \
-                     the angles in {angles_held}"
+                     the angles in {angles_held} (on the sides with cycles: {with_cycles_held}; \
+                     a side without cycles in {lost})"
                 );
-                summary.push((name.clone(), kind, held, angles_held));
+                summary.push((name.clone(), kind, held, angles_held, with_cycles_held));
             }
         }
     }
     assert!(
         summary
             .iter()
-            .any(|(name, _, held, _)| name == "fukuchi2018_anterior" && *held >= 9),
+            .any(|(name, kind, held, ..)| name == "fukuchi2018_anterior"
+                && *kind == Jitter::Measured
+                && *held >= 9),
         "{summary:?}"
     );
-    // With the jitter as measured, the frontal angles of every walk and view.
-    for (name, kind, _, angles_held) in &summary {
+    // With the jitter as measured, the frontal angles of every walk and view; with the knees
+    // and feet at their own, larger jitter, wherever a side keeps accepted cycles (its heel
+    // strikes, not its angles, are what that jitter breaks: BENCHMARKS.md, "Knees and feet").
+    for (name, kind, _, angles_held, with_cycles_held) in &summary {
         assert!(
             *kind != Jitter::Measured || *angles_held >= 9,
             "{name}: the angles held in {angles_held} of 10 seeds"
+        );
+        assert!(
+            *kind != Jitter::MeasuredLimbs || *with_cycles_held >= 9,
+            "{name}: with the limbs' jitter, the angles held in {with_cycles_held} of 10 seeds"
         );
     }
 }
