@@ -50,6 +50,14 @@ def catalogue(duration_s, height):
                 ["-vf", "eq=brightness=0.08:contrast=1.2"] + x264 + ["-crf", "18"]),
         Variant("noise", "sensor-like noise (temporal, strength 10)", ".mp4",
                 ["-vf", "noise=alls=10:allf=t"] + x264 + ["-crf", "18"]),
+        # A phone's .mov: the declared rate is its 1/600 s timescale, frame times up to 7 ms off
+        # a constant rate, and every other frame of 100-139 missing (dim light); gait resamples
+        # such a video to the camera's constant rate (frame_timing.rs). The times assume a 30 fps original.
+        Variant("phone_vfr", "a phone's variable frame rate (.mov, 1/600 s, frames missing)", ".mov",
+                ["-vf", "settb=1/600,setpts='N*20+round(4*sin(N*1.7))',"
+                        "select='not(between(n,100,139))+not(mod(n,2))'",
+                 "-fps_mode", "passthrough", "-enc_time_base", "1/600",
+                 "-video_track_timescale", "600"] + x264 + ["-crf", "18"]),
         Variant("cut", "first and last second cut", ".mp4",
                 ["-ss", "1", "-t", f"{cut:.3f}"] + x264 + ["-crf", "18"], offset_s=1.0),
     ]

@@ -10,6 +10,7 @@ use sha2::{Digest, Sha256};
 use crate::PipelineError;
 pub use crate::frame_reader::{FrameReader, READ_AHEAD};
 use crate::frame_reader::{Source, read_ahead};
+use crate::frame_timing::FrameTiming;
 use crate::still;
 pub use crate::video_decoder::DecoderRecording;
 use crate::video_decoder::{Request, VideoDecoder};
@@ -29,6 +30,8 @@ pub struct InputInfo {
     pub fps: f64,
     /// Number of frames, when the container says.
     pub frames: Option<usize>,
+    /// How a video's frames are spaced in time, when its timestamps tell.
+    pub timing: Option<FrameTiming>,
     /// Still images: how many have each EXIF orientation (1-8), applied when decoded.
     pub orientations: std::collections::BTreeMap<u16, usize>,
     pub(crate) kind: Kind,
@@ -161,6 +164,7 @@ impl InputInfo {
             height,
             fps: DEFAULT_IMAGE_FPS,
             frames: Some(files.len()),
+            timing: None,
             orientations,
             kind: Kind::Images(files),
             decode_warnings: DecodeWarnings::default(),
@@ -182,7 +186,7 @@ impl InputInfo {
             .unwrap_or_default()
     }
 
-    /// A content hash of the input, so cached results of another input (or
+    /// A content hash of the input as decoded, so cached results of another input (or
     /// of an edited file with the same name) are never reused.
     pub fn fingerprint(&self) -> Result<String, PipelineError> {
         let mut hasher = Sha256::new();
@@ -208,6 +212,11 @@ impl InputInfo {
                 hasher.update(&buf[..n]);
             }
         }
+        // Resampled frames are other frames than the file's own: cached results of a
+        // decoding that did not resample must not be taken for them.
+        if let Some(fps) = self.resampled_fps() {
+            hasher.update(format!("resampled to {fps} fps").as_bytes());
+        }
         Ok(hex(&hasher.finalize()))
     }
 
@@ -223,13 +232,25 @@ impl InputInfo {
     /// picture that will be shown smaller: decoding straight to that size
     /// saves copying and drawing full frames). Images are read as they are.
     pub fn frames_at(&self, size: Option<(u32, u32)>) -> Result<FrameReader, PipelineError> {
-        self.frames_as(Request { size, from: 0 })
+        self.frames_as(Request {
+            size,
+            from: 0,
+            resample: self.resampled_fps(),
+        })
     }
 
     /// As [`Self::frames`], from frame `from` on: the frames before it are
     /// not read (a video's are decoded but not converted or sent).
     pub fn frames_from(&self, from: usize) -> Result<FrameReader, PipelineError> {
-        self.frames_as(Request { size: None, from })
+        self.frames_as(Request {
+            size: None,
+            from,
+            resample: self.resampled_fps(),
+        })
+    }
+
+    fn resampled_fps(&self) -> Option<f64> {
+        self.timing.as_ref().and_then(|t| t.resampled_fps)
     }
 
     fn frames_as(&self, req: Request) -> Result<FrameReader, PipelineError> {
@@ -307,7 +328,7 @@ pub(crate) fn ffmpeg_missing(path: &Path, e: std::io::Error) -> PipelineError {
 pub fn ffprobe_command(path: &Path) -> Command {
     let mut cmd = Command::new("ffprobe");
     cmd.args(["-v", "error", "-select_streams", "v:0", "-show_entries"])
-        .arg("stream=width,height,r_frame_rate,nb_frames:stream_side_data=rotation")
+        .arg("stream=width,height,r_frame_rate,nb_frames:stream_side_data=rotation:packet=pts_time")
         .args(["-of", "json"])
         .arg(path);
     cmd
@@ -379,16 +400,33 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
             (d > 0.0 && n > 0.0 && fps.is_finite() && fps <= 1e5).then_some(fps)
         })
         .ok_or_else(|| bad("no frame rate"))?;
-    let frames = stream["nb_frames"].as_str().and_then(|n| n.parse().ok());
+    let mut frames = stream["nb_frames"].as_str().and_then(|n| n.parse().ok());
+    let times: Vec<f64> = json["packets"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|p| p["pts_time"].as_str()?.parse().ok())
+        .collect();
+    let timing = FrameTiming::measure(fps, &times);
+    let decode_warnings = DecodeWarnings::default();
+    if let Some(t) = &timing {
+        if t.resampled_fps.is_some() {
+            frames = Some(t.frames(times.len()));
+        }
+        if let Some(w) = t.warning() {
+            decode_warnings.add(w);
+        }
+    }
     Ok(InputInfo {
         path: path.to_path_buf(),
         width,
         height,
-        fps,
+        fps: timing.as_ref().map_or(fps, FrameTiming::fps),
         frames,
+        timing,
         orientations: Default::default(),
         kind: Kind::Video,
-        decode_warnings: DecodeWarnings::default(),
+        decode_warnings,
         reading: ReadClock::default(),
     })
 }

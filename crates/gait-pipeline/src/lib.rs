@@ -13,6 +13,7 @@ pub mod edges;
 mod error;
 pub mod folder_lock;
 mod frame_reader;
+pub mod frame_timing;
 pub mod input;
 pub mod interpolate;
 mod kin_manifest;

@@ -74,6 +74,10 @@ pub struct InputRecord {
     pub width: u32,
     pub height: u32,
     pub fps: f64,
+    /// A video's frame times as measured (frame_timing.rs): whether its rate varies, and the
+    /// constant rate its frames were resampled to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_timing: Option<crate::frame_timing::FrameTiming>,
     pub first_frame: usize,
     pub last_frame: Option<usize>,
     /// Still images: how many had each EXIF orientation (1-8, as stored), applied as `cv2.imread`

@@ -247,6 +247,7 @@ fn run_from(
             width: info.width,
             height: info.height,
             fps,
+            frame_timing: info.timing.clone(),
             first_frame: config.input.first_frame,
             last_frame: config.input.last_frame,
             exif_orientation: info.orientations.clone(),

@@ -41,6 +41,8 @@ pub(crate) struct Request {
     /// The first frame wanted: those before are decoded, as a video must be, but neither
     /// converted to RGB nor sent (the pose pass starts where the subject comes into view).
     pub from: usize,
+    /// A variable-rate video's frames resampled to this constant rate (frame_timing.rs).
+    pub resample: Option<f64>,
 }
 
 /// The ffmpeg command that decodes `path` to rgb24 frames on its standard output, as `req`
@@ -54,6 +56,10 @@ fn ffmpeg_command(path: &Path, req: Request) -> Command {
     cmd.args(["-v", "error", "-nostdin", "-threads", "1", "-i"])
         .arg(path);
     let mut filters = Vec::new();
+    // Before the selection, so frame numbers count the constant-rate frames.
+    if let Some(fps) = req.resample {
+        filters.push(format!("fps={fps}"));
+    }
     if req.from > 0 {
         filters.push(format!("select=gte(n\\,{})", req.from));
     }
