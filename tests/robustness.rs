@@ -263,7 +263,10 @@ fn a_phone_s_variable_frame_rate_is_resampled_to_the_camera_s_rate() {
     assert_eq!(timing["declared_fps"], 600.0, "{timing}");
     assert_eq!(timing["resampled_fps"], 30.0, "{timing}");
     let warnings = manifest["warnings"].to_string();
-    assert!(warnings.contains("resampled to a constant 30.00 fps"), "{warnings}");
+    assert!(
+        warnings.contains("resampled to a constant 30.00 fps"),
+        "{warnings}"
+    );
     // The 20 missing frames are filled again: the copy has the original's time line.
     let frames = manifest["frames_processed"].as_u64().unwrap();
     assert!((229..=230).contains(&frames), "{frames}");

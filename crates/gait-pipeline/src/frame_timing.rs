@@ -65,6 +65,9 @@ impl FrameTiming {
             return None;
         }
         let measured_fps = (t.len() - 1) as f64 / (last - first);
+        if !plausible(measured_fps) {
+            return None;
+        }
         let largest_deviation_frames = t
             .iter()
             .enumerate()
@@ -77,6 +80,9 @@ impl FrameTiming {
         ];
         let resampled_fps = (largest_deviation_frames > MAX_CONSTANT_DEVIATION)
             .then(|| nominal_rate(1.0 / typical_interval(intervals)));
+        if resampled_fps.is_some_and(|r| !plausible(r)) {
+            return None;
+        }
         Some(Self {
             declared_fps,
             measured_fps,
@@ -102,7 +108,9 @@ impl FrameTiming {
     pub fn frames(&self, times: usize) -> usize {
         match self.resampled_fps {
             // One slot per 1/rate from the first frame's to the last frame's time.
-            Some(r) => ((times.saturating_sub(1)) as f64 * r / self.measured_fps).round() as usize + 1,
+            Some(r) => {
+                ((times.saturating_sub(1)) as f64 * r / self.measured_fps).round() as usize + 1
+            }
             None => times,
         }
     }
@@ -125,6 +133,13 @@ impl FrameTiming {
             None => None,
         }
     }
+}
+
+/// A camera's rate: finite, above one frame a minute and below 10^5 frames per second (as
+/// input.rs requires of a declared rate), so hostile timestamps cannot give the decoder a rate
+/// of zero or infinity.
+fn plausible(fps: f64) -> bool {
+    fps.is_finite() && (1.0 / 60.0..=1e5).contains(&fps)
 }
 
 /// The camera's interval between consecutive frames: each interval counted as the whole
@@ -168,7 +183,9 @@ mod tests {
     #[test]
     fn timestamps_rounded_to_a_timescale_are_a_constant_rate() {
         // 29.97 fps in a 1/600 s timescale: intervals of 20 and 21 ticks.
-        let t = times(300, |i| (i as f64 * 1001.0 / 30000.0 * 600.0).round() / 600.0);
+        let t = times(300, |i| {
+            (i as f64 * 1001.0 / 30000.0 * 600.0).round() / 600.0
+        });
         let timing = FrameTiming::measure(30000.0 / 1001.0, &t).unwrap();
         assert_eq!(timing.fps(), 30000.0 / 1001.0);
         assert!(timing.resampled_fps.is_none());
@@ -177,7 +194,9 @@ mod tests {
     #[test]
     fn a_timescale_declared_as_the_rate_is_replaced_by_the_measured_one() {
         // A phone's .mov declaring 600 fps, its frames 33 ms apart give or take 7 ms.
-        let t = times(230, |i| (i as f64 * 20.0 + (4.0 * (i as f64 * 1.7).sin()).round()) / 600.0);
+        let t = times(230, |i| {
+            (i as f64 * 20.0 + (4.0 * (i as f64 * 1.7).sin()).round()) / 600.0
+        });
         let timing = FrameTiming::measure(600.0, &t).unwrap();
         assert!(timing.resampled_fps.is_none());
         assert!((timing.fps() - 30.0).abs() < 0.05, "{}", timing.fps());
@@ -195,7 +214,12 @@ mod tests {
         assert_eq!(timing.resampled_fps, Some(30.0));
         assert_eq!(timing.fps(), 30.0);
         assert_eq!(timing.frames(t.len()), 300);
-        assert!(timing.warning().unwrap().contains("resampled to a constant 30.00 fps"));
+        assert!(
+            timing
+                .warning()
+                .unwrap()
+                .contains("resampled to a constant 30.00 fps")
+        );
     }
 
     #[test]
@@ -215,5 +239,7 @@ mod tests {
         assert!(FrameTiming::measure(30.0, &[0.0, 0.1]).is_none());
         assert!(FrameTiming::measure(30.0, &[0.5, 0.5, 0.5]).is_none());
         assert!(FrameTiming::measure(30.0, &[f64::NAN, 1.0]).is_none());
+        assert!(FrameTiming::measure(30.0, &[0.0, 1.0, 1e300]).is_none());
+        assert!(FrameTiming::measure(30.0, &[0.0, 1e-9, 2e-9]).is_none());
     }
 }

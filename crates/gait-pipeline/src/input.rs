@@ -32,6 +32,8 @@ pub struct InputInfo {
     pub frames: Option<usize>,
     /// How a video's frames are spaced in time, when its timestamps tell.
     pub timing: Option<FrameTiming>,
+    /// The index of the video's stream that is analysed (`None`: the first video stream).
+    pub stream: Option<usize>,
     /// Still images: how many have each EXIF orientation (1-8), applied when decoded.
     pub orientations: std::collections::BTreeMap<u16, usize>,
     pub(crate) kind: Kind,
@@ -165,6 +167,7 @@ impl InputInfo {
             fps: DEFAULT_IMAGE_FPS,
             frames: Some(files.len()),
             timing: None,
+            stream: None,
             orientations,
             kind: Kind::Images(files),
             decode_warnings: DecodeWarnings::default(),
@@ -236,6 +239,7 @@ impl InputInfo {
             size,
             from: 0,
             resample: self.resampled_fps(),
+            stream: self.stream,
         })
     }
 
@@ -246,6 +250,7 @@ impl InputInfo {
             size: None,
             from,
             resample: self.resampled_fps(),
+            stream: self.stream,
         })
     }
 
@@ -324,14 +329,37 @@ pub(crate) fn ffmpeg_missing(path: &Path, e: std::io::Error) -> PipelineError {
     )
 }
 
-/// The ffprobe command that describes `path` in the JSON [`parse_ffprobe`] reads.
+/// The ffprobe command that describes `path` in the JSON [`parse_ffprobe`] reads: every video
+/// stream that is not a cover picture (`V`; the video is chosen among them) and their packets'
+/// times (frame_timing.rs), one packet a line.
 pub fn ffprobe_command(path: &Path) -> Command {
     let mut cmd = Command::new("ffprobe");
-    cmd.args(["-v", "error", "-select_streams", "v:0", "-show_entries"])
-        .arg("stream=width,height,r_frame_rate,nb_frames:stream_side_data=rotation:packet=pts_time")
-        .args(["-of", "json"])
+    cmd.args(["-v", "error", "-select_streams", "V", "-show_entries"])
+        .arg(concat!(
+            "stream=index,codec_type,width,height,r_frame_rate,nb_frames",
+            ":stream_disposition=attached_pic:stream_side_data=rotation",
+            ":packet=stream_index,pts_time"
+        ))
+        .args(["-of", "json=compact=1"])
         .arg(path);
     cmd
+}
+
+/// The stream analysed: the video stream with the most pixels that is not a cover picture (the
+/// one ffmpeg itself would take; a camera's small preview stream may come first). A stream
+/// without a `codec_type` counts as video (older recordings of ffprobe's output).
+fn video_stream(streams: &serde_json::Value) -> Option<&serde_json::Value> {
+    let pixels = |s: &serde_json::Value| {
+        // Saturating: a hostile description may declare any width; the size check follows.
+        (s["width"].as_u64().unwrap_or(0)).saturating_mul(s["height"].as_u64().unwrap_or(0))
+    };
+    streams
+        .as_array()?
+        .iter()
+        .filter(|s| s["codec_type"].as_str().is_none_or(|t| t == "video"))
+        .filter(|s| s["disposition"]["attached_pic"].as_u64() != Some(1))
+        .rev()
+        .max_by_key(|s| pixels(s))
 }
 
 fn probe_video(path: &Path) -> Result<InputInfo, PipelineError> {
@@ -364,9 +392,8 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
     let bad = |why: &str| not_a_video(path, why);
     let json: serde_json::Value =
         serde_json::from_slice(stdout).map_err(|_| bad("ffprobe output unreadable"))?;
-    let stream = json["streams"]
-        .get(0)
-        .ok_or_else(|| bad("no video stream"))?;
+    let stream = video_stream(&json["streams"]).ok_or_else(|| bad("no video stream"))?;
+    let index = stream["index"].as_u64();
     let dim = |k: &str| {
         stream[k]
             .as_u64()
@@ -405,6 +432,7 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         .as_array()
         .into_iter()
         .flatten()
+        .filter(|p| p["stream_index"].as_u64() == index)
         .filter_map(|p| p["pts_time"].as_str()?.parse().ok())
         .collect();
     let timing = FrameTiming::measure(fps, &times);
@@ -424,6 +452,7 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         fps: timing.as_ref().map_or(fps, FrameTiming::fps),
         frames,
         timing,
+        stream: index.and_then(|i| usize::try_from(i).ok()),
         orientations: Default::default(),
         kind: Kind::Video,
         decode_warnings,
@@ -507,6 +536,91 @@ mod tests {
                 "{rate}"
             );
         }
+    }
+
+    fn ffmpeg(args: &[&str]) {
+        let status = Command::new("ffmpeg")
+            .args(["-v", "error", "-y"])
+            .args(args)
+            .status()
+            .expect("ffmpeg (tools/setup.sh installs it)");
+        assert!(status.success());
+    }
+
+    fn all_frames(info: &InputInfo) -> Vec<gait_core::Frame> {
+        let mut r = info.frames().unwrap();
+        std::iter::from_fn(|| r.next_frame().unwrap()).collect()
+    }
+
+    /// Audio first, then a small preview stream, then the walk: the walk is analysed, and its
+    /// frames are decoded at the size the probe said.
+    #[test]
+    fn the_largest_video_stream_is_analysed() {
+        let dir = tempfile::tempdir().unwrap();
+        let clip = dir.path().join("clip.mkv");
+        let clip = clip.to_str().unwrap();
+        ffmpeg(&[
+            "-f",
+            "lavfi",
+            "-i",
+            "sine=d=1",
+            "-f",
+            "lavfi",
+            "-i",
+            "testsrc=size=32x24:rate=30:d=1",
+            "-f",
+            "lavfi",
+            "-i",
+            "testsrc=size=64x48:rate=30:d=1",
+            "-map",
+            "0",
+            "-map",
+            "1",
+            "-map",
+            "2",
+            "-c:v",
+            "mjpeg",
+            clip,
+        ]);
+        let info = InputInfo::open(Path::new(clip)).unwrap();
+        assert_eq!((info.width, info.height, info.stream), (64, 48, Some(2)));
+        let frames = all_frames(&info);
+        assert_eq!(frames.len(), 30);
+        assert!(frames.iter().all(|f| (f.width(), f.height()) == (64, 48)));
+    }
+
+    /// Frames 20-39 of a 30 fps clip with every other one missing: resampled to 30 fps, the
+    /// missing frames' slots repeat the frame before, and the clip keeps its 60 frames' time.
+    #[test]
+    fn a_variable_frame_rate_is_decoded_at_the_camera_rate() {
+        let dir = tempfile::tempdir().unwrap();
+        let clip = dir.path().join("clip.mkv");
+        let clip = clip.to_str().unwrap();
+        ffmpeg(&[
+            "-f",
+            "lavfi",
+            "-i",
+            "testsrc=size=64x48:rate=30:d=2",
+            "-vf",
+            "select='not(between(n,20,39))+not(mod(n,2))'",
+            "-fps_mode",
+            "passthrough",
+            "-c:v",
+            "ffv1",
+            clip,
+        ]);
+        let info = InputInfo::open(Path::new(clip)).unwrap();
+        let timing = info.timing.clone().unwrap();
+        assert_eq!((timing.resampled_fps, info.fps), (Some(30.0), 30.0));
+        let frames = all_frames(&info);
+        assert!((59..=60).contains(&frames.len()), "{}", frames.len());
+        assert!(frames[21].image == frames[20].image);
+        assert!(frames[20].image != frames[19].image && frames[22].image != frames[21].image);
+        assert!(
+            info.decode_warnings()
+                .iter()
+                .any(|w| w.contains("resampled"))
+        );
     }
 
     #[test]

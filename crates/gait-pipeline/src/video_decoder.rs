@@ -43,6 +43,8 @@ pub(crate) struct Request {
     pub from: usize,
     /// A variable-rate video's frames resampled to this constant rate (frame_timing.rs).
     pub resample: Option<f64>,
+    /// The input's stream to decode (`None`: its first video stream).
+    pub stream: Option<usize>,
 }
 
 /// The ffmpeg command that decodes `path` to rgb24 frames on its standard output, as `req`
@@ -54,7 +56,10 @@ fn ffmpeg_command(path: &Path, req: Request) -> Command {
     // CPU to coordinate (the sample's VP9 decode: 1.5 CPU s on one thread, 1.75 on two, at
     // about the same wall time); the frames are the same bits.
     cmd.args(["-v", "error", "-nostdin", "-threads", "1", "-i"])
-        .arg(path);
+        .arg(path)
+        // The stream ffprobe described (input.rs), so the frames have the size it said.
+        .arg("-map")
+        .arg(req.stream.map_or("0:V:0".to_string(), |i| format!("0:{i}")));
     let mut filters = Vec::new();
     // Before the selection, so frame numbers count the constant-rate frames.
     if let Some(fps) = req.resample {
@@ -69,10 +74,11 @@ fn ffmpeg_command(path: &Path, req: Request) -> Command {
     if !filters.is_empty() {
         cmd.arg("-vf").arg(filters.join(","));
     }
-    if req.from > 0 {
-        // The frames as they come, none repeated to fill the dropped ones' time.
-        cmd.args(["-fps_mode", "passthrough"]);
-    }
+    // The frames as they come (or as the fps filter made them), in every pass alike: left to
+    // itself, ffmpeg repeats frames to fill time to a raw output, e.g. a first frame for the
+    // 23 ms a .mkv's audio starts before its video, and a pass that starts later (`from`)
+    // would then number the same frame one lower.
+    cmd.args(["-fps_mode", "passthrough"]);
     cmd.args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]);
     cmd
 }
