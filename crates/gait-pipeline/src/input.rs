@@ -18,6 +18,10 @@ use crate::video_decoder::{Request, VideoDecoder};
 const VIDEO_EXTENSIONS: [&str; 6] = ["mp4", "avi", "mov", "webm", "mkv", "m4v"];
 const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "bmp", "tif"];
 
+/// Names the way video frames are decoded (video_decoder.rs) in the cache keys: change it
+/// when a change to the decoding can change a video's frames.
+const VIDEO_DECODING: &str = "ffmpeg: largest video stream, frames as they come (passthrough)";
+
 /// Frame rate assumed for image folders and single images.
 pub const DEFAULT_IMAGE_FPS: f64 = 30.0;
 
@@ -215,8 +219,12 @@ impl InputInfo {
                 hasher.update(&buf[..n]);
             }
         }
-        // Resampled frames are other frames than the file's own: cached results of a
-        // decoding that did not resample must not be taken for them.
+        // How a video is decoded is part of what its frames are: cached results of another
+        // decoding (before 2026-12-06 ffmpeg could repeat a first frame, and resampled frames
+        // are not the file's own) must not be taken for them.
+        if self.kind == Kind::Video {
+            hasher.update(VIDEO_DECODING.as_bytes());
+        }
         if let Some(fps) = self.resampled_fps() {
             hasher.update(format!("resampled to {fps} fps").as_bytes());
         }
