@@ -34,6 +34,14 @@ def catalogue(duration_s, height):
         Variant("hevc_mov", "HEVC in .mov (an iPhone)", ".mov",
                 ["-c:v", "libx265", "-crf", "23", "-preset", "fast", "-tag:v", "hvc1",
                  "-pix_fmt", "yuv420p", "-x265-params", "log-level=error"]),
+        # An iPhone's default since the iPhone 12: 10-bit HEVC in HLG. gait converts it back to
+        # standard range (colour.rs); decoded as standard video it is washed out and dark.
+        Variant("hdr_hlg_mov", "HDR: 10-bit HEVC in HLG, .mov (an iPhone's default)", ".mov",
+                ["-vf", "zscale=tin=bt709:min=bt709:pin=bt709:t=arib-std-b67:m=bt2020nc:p=bt2020:r=tv,"
+                        "format=yuv420p10le",
+                 "-c:v", "libx265", "-crf", "23", "-preset", "fast", "-tag:v", "hvc1",
+                 "-x265-params", "log-level=error", "-color_trc", "arib-std-b67",
+                 "-color_primaries", "bt2020", "-colorspace", "bt2020nc"]),
         Variant("vp9_webm", "VP9 in .webm (a browser recording)", ".webm",
                 ["-c:v", "libvpx-vp9", "-crf", "32", "-b:v", "0", "-deadline", "realtime",
                  "-cpu-used", "8", "-row-mt", "1"]),

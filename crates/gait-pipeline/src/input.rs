@@ -38,6 +38,9 @@ pub struct InputInfo {
     pub timing: Option<FrameTiming>,
     /// The index of the video's stream that is analysed (`None`: the first video stream).
     pub stream: Option<usize>,
+    /// An HDR video's transfer (ffprobe's `color_transfer`: "arib-std-b67" is HLG,
+    /// "smpte2084" PQ): its frames are converted to standard range (colour.rs).
+    pub hdr_transfer: Option<String>,
     /// Still images: how many have each EXIF orientation (1-8), applied when decoded.
     pub orientations: std::collections::BTreeMap<u16, usize>,
     pub(crate) kind: Kind,
@@ -172,6 +175,7 @@ impl InputInfo {
             frames: Some(files.len()),
             timing: None,
             stream: None,
+            hdr_transfer: None,
             orientations,
             kind: Kind::Images(files),
             decode_warnings: DecodeWarnings::default(),
@@ -228,6 +232,9 @@ impl InputInfo {
         if let Some(fps) = self.resampled_fps() {
             hasher.update(format!("resampled to {fps} fps").as_bytes());
         }
+        if let Some(t) = &self.hdr_transfer {
+            hasher.update(format!("converted from {t} to standard range").as_bytes());
+        }
         Ok(hex(&hasher.finalize()))
     }
 
@@ -248,6 +255,10 @@ impl InputInfo {
             from: 0,
             resample: self.resampled_fps(),
             stream: self.stream,
+            standard_range: self
+                .hdr_transfer
+                .as_deref()
+                .and_then(crate::colour::to_standard_range),
         })
     }
 
@@ -259,6 +270,10 @@ impl InputInfo {
             from,
             resample: self.resampled_fps(),
             stream: self.stream,
+            standard_range: self
+                .hdr_transfer
+                .as_deref()
+                .and_then(crate::colour::to_standard_range),
         })
     }
 
@@ -344,7 +359,7 @@ pub fn ffprobe_command(path: &Path) -> Command {
     let mut cmd = Command::new("ffprobe");
     cmd.args(["-v", "error", "-select_streams", "V", "-show_entries"])
         .arg(concat!(
-            "stream=index,codec_type,width,height,r_frame_rate,nb_frames",
+            "stream=index,codec_type,width,height,r_frame_rate,nb_frames,color_transfer",
             ":stream_disposition=attached_pic:stream_side_data=rotation",
             ":packet=stream_index,pts_time"
         ))
@@ -445,6 +460,13 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         .collect();
     let timing = FrameTiming::measure(fps, &times);
     let decode_warnings = DecodeWarnings::default();
+    let hdr_transfer = stream["color_transfer"]
+        .as_str()
+        .filter(|t| crate::colour::to_standard_range(t).is_some())
+        .map(str::to_string);
+    if let Some(w) = hdr_transfer.as_deref().and_then(crate::colour::warning) {
+        decode_warnings.add(w);
+    }
     if let Some(t) = &timing {
         if t.resampled_fps.is_some() {
             frames = Some(t.frames(times.len()));
@@ -461,6 +483,7 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         frames,
         timing,
         stream: index.and_then(|i| usize::try_from(i).ok()),
+        hdr_transfer,
         orientations: Default::default(),
         kind: Kind::Video,
         decode_warnings,
@@ -629,6 +652,73 @@ mod tests {
                 .iter()
                 .any(|w| w.contains("resampled"))
         );
+    }
+
+    /// An HLG clip (testsrc made HLG by zscale, losslessly stored) is decoded to the standard
+    /// range frames it was made from, not washed out.
+    #[test]
+    fn an_hdr_video_is_decoded_to_standard_range() {
+        let dir = tempfile::tempdir().unwrap();
+        let (sdr, hlg) = (dir.path().join("sdr.mkv"), dir.path().join("hlg.mkv"));
+        // Colours kept inside BT.709's gamut, as a natural scene's mostly are.
+        let src = "testsrc2=size=64x48:rate=30:d=0.2,hue=s=0.4";
+        ffmpeg(&[
+            "-f",
+            "lavfi",
+            "-i",
+            src,
+            "-c:v",
+            "ffv1",
+            "-pix_fmt",
+            "yuv444p",
+            sdr.to_str().unwrap(),
+        ]);
+        ffmpeg(&[
+            "-f",
+            "lavfi",
+            "-i",
+            src,
+            "-vf",
+            "zscale=tin=bt709:min=bt709:pin=bt709:t=arib-std-b67:m=bt2020nc:p=bt2020:r=tv,format=yuv444p10le",
+            "-c:v",
+            "ffv1",
+            "-color_trc",
+            "arib-std-b67",
+            "-color_primaries",
+            "bt2020",
+            "-colorspace",
+            "bt2020nc",
+            hlg.to_str().unwrap(),
+        ]);
+        let info = InputInfo::open(&hlg).unwrap();
+        assert_eq!(info.hdr_transfer.as_deref(), Some("arib-std-b67"));
+        assert!(
+            info.decode_warnings()
+                .iter()
+                .any(|w| w.contains("HDR (HLG)"))
+        );
+        let (a, b) = (
+            all_frames(&info),
+            all_frames(&InputInfo::open(&sdr).unwrap()),
+        );
+        assert_eq!(a.len(), b.len());
+        let diff = |x: &gait_core::Frame, y: &gait_core::Frame| {
+            let (p, q) = (x.image.as_raw(), y.image.as_raw());
+            p.iter()
+                .zip(q)
+                .map(|(u, v)| u.abs_diff(*v) as f64)
+                .sum::<f64>()
+                / p.len() as f64
+        };
+        let d = diff(&a[0], &b[0]);
+        assert!(d < 6.0, "mean difference {d:.1} grey levels");
+        // Decoded as standard video, the same frames differ by four times as much (21 levels).
+        let as_standard = InputInfo {
+            hdr_transfer: None,
+            ..info
+        };
+        let washed = diff(&all_frames(&as_standard)[0], &b[0]);
+        assert!(washed > 15.0, "{washed:.1}");
     }
 
     #[test]

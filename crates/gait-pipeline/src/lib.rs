@@ -6,6 +6,7 @@ pub use gait_core::atomic;
 mod backend_choice;
 mod beside;
 mod cache;
+mod colour;
 pub mod config;
 mod config_origin;
 mod driver;

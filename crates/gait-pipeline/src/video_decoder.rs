@@ -45,6 +45,8 @@ pub(crate) struct Request {
     pub resample: Option<f64>,
     /// The input's stream to decode (`None`: its first video stream).
     pub stream: Option<usize>,
+    /// The filter that converts an HDR video to standard range first (colour.rs).
+    pub standard_range: Option<&'static str>,
 }
 
 /// The ffmpeg command that decodes `path` to rgb24 frames on its standard output, as `req`
@@ -61,6 +63,9 @@ fn ffmpeg_command(path: &Path, req: Request) -> Command {
         .arg("-map")
         .arg(req.stream.map_or("0:V:0".to_string(), |i| format!("0:{i}")));
     let mut filters = Vec::new();
+    if let Some(f) = req.standard_range {
+        filters.push(f.to_string());
+    }
     // Before the selection, so frame numbers count the constant-rate frames.
     if let Some(fps) = req.resample {
         filters.push(format!("fps={fps}"));
