@@ -79,9 +79,12 @@ pub struct InputRecord {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frame_timing: Option<crate::frame_timing::FrameTiming>,
     /// An HDR video's transfer ("arib-std-b67": HLG, "smpte2084": PQ), converted to standard
-    /// range before the pose model (colour.rs).
+    /// range before the pose model (picture.rs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hdr_transfer: Option<String>,
+    /// An interlaced video's field order, deinterlaced before the pose model (picture.rs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interlaced: Option<String>,
     pub first_frame: usize,
     pub last_frame: Option<usize>,
     /// Still images: how many had each EXIF orientation (1-8, as stored), applied as `cv2.imread`

@@ -249,6 +249,7 @@ fn run_from(
             fps,
             frame_timing: info.timing.clone(),
             hdr_transfer: info.hdr_transfer.clone(),
+            interlaced: info.interlaced.clone(),
             first_frame: config.input.first_frame,
             last_frame: config.input.last_frame,
             exif_orientation: info.orientations.clone(),

@@ -45,8 +45,10 @@ pub(crate) struct Request {
     pub resample: Option<f64>,
     /// The input's stream to decode (`None`: its first video stream).
     pub stream: Option<usize>,
-    /// The filter that converts an HDR video to standard range first (colour.rs).
+    /// The filter that converts an HDR video to standard range first (picture.rs).
     pub standard_range: Option<&'static str>,
+    /// The filter that deinterlaces an interlaced video first (picture.rs).
+    pub deinterlace: Option<&'static str>,
 }
 
 /// The ffmpeg command that decodes `path` to rgb24 frames on its standard output, as `req`
@@ -63,9 +65,9 @@ fn ffmpeg_command(path: &Path, req: Request) -> Command {
         .arg("-map")
         .arg(req.stream.map_or("0:V:0".to_string(), |i| format!("0:{i}")));
     let mut filters = Vec::new();
-    if let Some(f) = req.standard_range {
-        filters.push(f.to_string());
-    }
+    // Fields are woven back into frames before anything else looks at the pictures.
+    filters.extend(req.deinterlace.map(str::to_string));
+    filters.extend(req.standard_range.map(str::to_string));
     // Before the selection, so frame numbers count the constant-rate frames.
     if let Some(fps) = req.resample {
         filters.push(format!("fps={fps}"));

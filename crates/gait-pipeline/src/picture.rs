@@ -1,10 +1,12 @@
-//! HDR video (phones record it by default: iPhones HLG, many Android phones PQ) converted to
-//! the standard range the pose models were trained on.
+//! What the decoder does to a video's pictures before the pose model sees them: HDR video
+//! (phones record it by default: iPhones HLG, many Android phones PQ) converted to the standard
+//! range the pose models were trained on, and interlaced video (camcorders' 1080i) deinterlaced.
 //!
 //! Decoded as if it were standard video, an HLG or PQ frame comes out washed out and dark (on
 //! the sample made HLG, a mean difference of 43 grey levels from the original; the pose model
-//! then lost a heel strike and a cycle). zscale converts the transfer, primaries and matrix to
-//! BT.709, clipping what lies above the standard range's white, as a standard camera would.
+//! then moved 4 of 12 events). zscale converts the transfer, primaries and matrix to BT.709,
+//! clipping what lies above the standard range's white, as a standard camera would. An
+//! interlaced frame holds two fields 1/50 or 1/60 s apart: a moving leg is drawn twice, combed.
 
 /// The ffmpeg filter that turns frames with this transfer (ffprobe's `color_transfer`) into
 /// standard-range BT.709, or `None` when they already are.
@@ -30,6 +32,14 @@ pub(crate) fn warning(transfer: &str) -> Option<String> {
     ))
 }
 
+/// The ffmpeg filter that deinterlaces frames of this field order (ffprobe's `field_order`),
+/// or `None` for progressive video: bwdif, one frame out per frame in (the frame rate and the
+/// frame numbers stay), only on frames the decoder marks interlaced.
+pub(crate) fn deinterlace(field_order: &str) -> Option<&'static str> {
+    matches!(field_order, "tt" | "bb" | "tb" | "bt")
+        .then_some("bwdif=mode=send_frame:parity=auto:deint=interlaced")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -45,5 +55,15 @@ mod tests {
             );
         }
         assert!(warning("arib-std-b67").unwrap().contains("HLG"));
+    }
+
+    #[test]
+    fn only_interlaced_field_orders_are_deinterlaced() {
+        for order in ["tt", "bb", "tb", "bt"] {
+            assert!(deinterlace(order).is_some(), "{order}");
+        }
+        for order in ["progressive", "unknown", ""] {
+            assert!(deinterlace(order).is_none(), "{order}");
+        }
     }
 }
