@@ -113,6 +113,8 @@ fn visits(out: &Path, plan: &Plan, cohort: &[CohortRow]) -> Result<Vec<Written>,
                 date: first.date.clone(),
                 prosthetic: None,
             },
+            // Rows that failed are reported by the batch's own summary.
+            notes: Vec::new(),
         };
         let summary = gait_visit::write(&visit_dir(out, &subject, &session), &passes, &o)
             .map_err(|e| fail(format!("the visit {subject} {session}"), e))?;

@@ -43,6 +43,8 @@ pub struct VisitOptions<'a> {
     pub amputation: Option<&'a str>,
     /// Who and when (visit.json), for `gait progress`.
     pub label: VisitLabel,
+    /// What the caller has to say about the visit (a pass that failed and is left out).
+    pub notes: Vec<String>,
 }
 
 /// What [`write`] made.
@@ -95,6 +97,7 @@ pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSumma
         })
         .chain(sources.iter().map(|s| format!("{}: {}", s.what, s.pass)))
         .collect();
+    report.warnings = warnings(passes, o);
     report.sections.push(tables::checklist_html(&checklist, o));
     report.frontal = frontal_view.map(|view| gait_report::frontal::FrontalReport {
         how: "the front or back pass with the most cycles of each side".into(),
@@ -118,6 +121,36 @@ pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSumma
     })
 }
 
+/// The visit's warnings: the caller's, frame rates that differ, then each pass's own, named by
+/// its view, so the visit report says what each pass's report says (a frame rate resampled, an
+/// HDR video converted) without opening it.
+fn warnings(passes: &[Pass], o: &VisitOptions) -> Vec<String> {
+    let own = passes.iter().flat_map(|p| {
+        p.warnings
+            .iter()
+            .map(move |w| format!("{}: {w}", p.label()))
+    });
+    o.notes
+        .iter()
+        .cloned()
+        .chain(frame_rate_warning(passes))
+        .chain(own)
+        .collect()
+}
+
+/// Passes filmed at different frame rates are combined in seconds; this says which.
+pub fn frame_rate_warning(passes: &[Pass]) -> Option<String> {
+    let rates: Vec<(String, f64)> = passes
+        .iter()
+        .filter_map(|p| Some((p.label(), p.fps?)))
+        .collect();
+    let (first, f0) = rates.first()?;
+    let (other, f) = rates.iter().find(|(_, f)| (f - f0).abs() > 0.01)?;
+    Some(format!(
+        "{other} was filmed at {f} fps and {first} at {f0} fps; the visit combines them in seconds"
+    ))
+}
+
 /// Each pass's checklist, then the best verdict per item and side.
 fn judge_each(
     passes: &[Pass],
@@ -135,4 +168,56 @@ fn judge_each(
         per_pass.push((p, list.verdicts));
     }
     Ok(combine::checklist(&per_pass))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pass(view: &str, video: &str, fps: f64, warnings: &[&str]) -> Pass {
+        Pass {
+            view: view.into(),
+            video: video.into(),
+            dir: PathBuf::new(),
+            sagittal: Vec::new(),
+            frontal: Vec::new(),
+            spatiotemporal: Vec::new(),
+            status: "done".into(),
+            fps: Some(fps),
+            warnings: warnings.iter().map(|w| w.to_string()).collect(),
+        }
+    }
+
+    /// The visit report says what each pass's own report says, named by its view, after the
+    /// caller's notes and the frame rates that differ.
+    #[test]
+    fn the_visit_carries_each_pass_s_warnings() {
+        let checklist = ChecklistConfig::default();
+        let o = VisitOptions {
+            checklist: &checklist,
+            normative: None,
+            prosthetic: None,
+            amputation: None,
+            label: VisitLabel::default(),
+            notes: vec!["the anterior pass a.mp4 failed and is left out: no person".into()],
+        };
+        let passes = [
+            pass(
+                "left",
+                "l.mov",
+                30.0,
+                &["its frames were resampled to a constant 30.00 fps"],
+            ),
+            pass("right", "r.mov", 25.0, &["the video is HDR (HLG)"]),
+        ];
+        let w = warnings(&passes, &o);
+        assert_eq!(w.len(), 4, "{w:?}");
+        assert!(w[0].contains("anterior pass"));
+        assert!(w[1].contains("filmed at 25 fps"));
+        assert_eq!(
+            w[2],
+            "left view (l.mov): its frames were resampled to a constant 30.00 fps"
+        );
+        assert_eq!(w[3], "right view (r.mov): the video is HDR (HLG)");
+    }
 }

@@ -24,6 +24,10 @@ pub struct Pass {
     pub spatiotemporal: Vec<StParam>,
     /// run.json's `status` and `reason` (a run with nothing to measure).
     pub status: String,
+    /// run.json's frame rate.
+    pub fps: Option<f64>,
+    /// run.json's warnings (a resampled frame rate, an HDR conversion, bridged keypoints).
+    pub warnings: Vec<String>,
 }
 
 impl Pass {
@@ -46,17 +50,21 @@ impl Pass {
             .map(|p| read_spatiotemporal(&p))
             .transpose()
             .map_err(io)?;
-        let status = file("run.json")
+        let manifest = file("run.json")
             .and_then(|p| std::fs::read_to_string(p).ok())
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            .map(|v| {
-                let s = v["status"].as_str().unwrap_or("done").to_string();
-                match v["reason"].as_str() {
-                    Some(r) => format!("{s}: {r}"),
-                    None => s,
-                }
-            })
-            .unwrap_or_else(|| "done".into());
+            .unwrap_or_default();
+        let status = manifest["status"].as_str().unwrap_or("done").to_string();
+        let status = match manifest["reason"].as_str() {
+            Some(r) => format!("{status}: {r}"),
+            None => status,
+        };
+        let warnings = manifest["warnings"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|w| w.as_str().map(str::to_string))
+            .collect();
         Ok(Self {
             view: view.into(),
             video: video.to_path_buf(),
@@ -65,6 +73,8 @@ impl Pass {
             frontal: frontal.unwrap_or_default(),
             spatiotemporal: spatiotemporal.unwrap_or_default(),
             status,
+            fps: manifest["input"]["fps"].as_f64(),
+            warnings,
         })
     }
 

@@ -74,7 +74,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
         ));
     }
     let base = PipelineConfig::load(args.config.as_deref(), &args.sets)?;
-    let mut done = Vec::new();
+    let (mut done, mut notes) = (Vec::new(), Vec::new());
     for (k, (view, video)) in passes.iter().enumerate() {
         let dir = args.out.join("passes").join(format!("{}-{view}", k + 1));
         match run_pass(&args, view, video, &dir, models_dir) {
@@ -82,11 +82,15 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
                 done.push(Pass::read(view, video, &dir).map_err(|e| CliError::new(e.to_string()))?)
             }
             // The visit goes on with the passes that ran.
-            Err(e) => eprintln!(
-                "warning: the {view} pass {} failed and is left out: {}",
-                video.display(),
-                crate::error::one_line(&e.message)
-            ),
+            Err(e) => {
+                let note = format!(
+                    "the {view} pass {} failed and is left out: {}",
+                    video.display(),
+                    crate::error::one_line(&e.message)
+                );
+                eprintln!("warning: {note}");
+                notes.push(note);
+            }
         }
     }
     if done.is_empty() {
@@ -94,7 +98,9 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
             "no pass of the visit ran; see the errors above",
         ));
     }
-    warn_frame_rates(&done);
+    if let Some(w) = gait_visit::frame_rate_warning(&done) {
+        eprintln!("warning: {w}");
+    }
     let kin = &base.kinematics;
     let o = VisitOptions {
         checklist: &base.checklist,
@@ -110,6 +116,7 @@ pub fn execute(args: Args, models_dir: &Path) -> Result<(), CliError> {
             date: args.date.clone(),
             prosthetic: None,
         },
+        notes,
     };
     let t = std::time::Instant::now();
     let summary =
@@ -153,27 +160,6 @@ fn run_pass(
     }
     eprintln!("{view} pass: {}", video.display());
     crate::commands::run::run_and_report(&config, &opts)
-}
-
-/// Passes filmed at different frame rates are combined, with a warning naming them.
-fn warn_frame_rates(passes: &[Pass]) {
-    let fps = |p: &Pass| {
-        std::fs::read_to_string(p.dir.join("run.json"))
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            .and_then(|v| v["input"]["fps"].as_f64())
-    };
-    let rates: Vec<(String, f64)> = passes
-        .iter()
-        .filter_map(|p| Some((p.label(), fps(p)?)))
-        .collect();
-    if let Some((first, f0)) = rates.first()
-        && let Some((other, f)) = rates.iter().find(|(_, f)| (f - f0).abs() > 0.01)
-    {
-        eprintln!(
-            "warning: {other} was filmed at {f} fps and {first} at {f0} fps; the visit combines them in seconds"
-        );
-    }
 }
 
 /// report.pdf beside the visit's report.html, as a run prints its own.
