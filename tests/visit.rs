@@ -95,6 +95,7 @@ fn visit_of(case: &Path, views: &[&str], height_m: f64, work: &Path, fps: f64) -
             date: String::new(),
             prosthetic: None,
         },
+        notes: Vec::new(),
     };
     let summary = gait_visit::write(&work.join("visit"), &passes, &o).expect("visit");
     assert!(
