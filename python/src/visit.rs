@@ -50,6 +50,8 @@ pub(crate) fn visit(
             date,
             prosthetic: None,
         },
+        // The passes were run by the caller (gait.run); those that failed are not given.
+        notes: Vec::new(),
     };
     Ok(gait_visit::write(&out, &read, &o).map_err(bad)?.report)
 }
