@@ -24,6 +24,7 @@ mod overlay;
 mod passes;
 mod picture;
 mod plan;
+mod probe;
 mod progress;
 mod redraw;
 pub mod registry;
