@@ -37,6 +37,7 @@ mod feet;
 mod foot_shape;
 pub mod frontal;
 pub mod glitch;
+pub mod ground;
 mod input_check;
 pub mod likelihood;
 pub mod margins;
@@ -156,6 +157,9 @@ pub struct KinResult {
     /// Mean curves over the accepted strides.
     pub cycles: Vec<CycleCurve>,
     pub spatiotemporal: Vec<Param>,
+    /// How fast the ground moved in the image (a side view's; ground.rs): where it moves, the
+    /// strides' lengths are their steps'.
+    pub ground: Option<ground::GroundMotion>,
     /// Pixels per cm when a scale was configured.
     pub px_per_cm: Option<f64>,
     /// What was applied from `kinematics.corrections`, when set.
@@ -314,7 +318,19 @@ fn run_chain(
         !corrections::excluded_overlap(&fixes.exclude, a, b)
             && quality::step_ok(&cycle_quality, &bouts, enforce_bouts, a, b)
     };
-    let mut spatiotemporal = spatiotemporal::compute(t, &events, &accepted, &step_ok, kin);
+    let ground = match frontal_scale {
+        Some(_) => None,
+        None => ground::measure(t, &events),
+    };
+    if let Some(g) = ground.filter(ground::GroundMotion::moves) {
+        warnings.push(format!(
+            "the ground moves in the image at {:.0} % of the walking speed (a camera following the walker, or a treadmill): stride lengths and speeds are taken from the steps, each measured within one frame",
+            100.0 * g.share()
+        ));
+    }
+    let ground_moves = ground.is_some_and(|g| g.moves());
+    let mut spatiotemporal =
+        spatiotemporal::compute(t, &events, &accepted, &step_ok, kin, ground_moves);
     let frontal = frontal_scale.as_ref().map(|scale| {
         // Lengths along the walk are depth in a front view: only the timing holds.
         spatiotemporal.retain(spatiotemporal::Param::is_temporal);
@@ -353,6 +369,7 @@ fn run_chain(
         events,
         events_from_file: from_file,
         event_keypoints,
+        ground,
         margins: margins::Margins {
             events: event_margins,
             cycles: margins::cycles(&cycle_quality, kin),

@@ -76,6 +76,8 @@ struct Measure<'a> {
     t: &'a Tracks,
     events: &'a [Event],
     per: f64,
+    /// The ground moves in the image (ground.rs): a stride is its two steps.
+    ground_moves: bool,
 }
 
 impl Measure<'_> {
@@ -115,13 +117,32 @@ impl Measure<'_> {
             }) {
                 stance.push(100.0 * (to.time() - t0) / (t1 - t0));
             }
-            if let (Some(a), Some(b)) = (self.heel_x(side, s.start), self.heel_x(side, s.end)) {
-                let l = (b - a).abs() / self.per;
+            if let Some(l) = self.stride_length(side, s) {
                 stride_len.push(l);
                 speed.push(l / dur);
             }
         }
         [stride_t, stance, stride_len, speed]
+    }
+
+    /// A stride's length: how far its heel moved between its strikes, or, where the ground
+    /// moves in the image, its two steps (the heels' distance at the other foot's strike within
+    /// it and at its own closing strike).
+    fn stride_length(&self, side: Side, s: &Stride) -> Option<f64> {
+        let px = if self.ground_moves {
+            let mid = self.events.iter().find(|e| {
+                e.side == side.other()
+                    && e.event == EventKind::HeelStrike
+                    && e.frame > s.start
+                    && e.frame < s.end
+            })?;
+            let apart =
+                |f: usize| Some((self.heel_x(side, f)? - self.heel_x(side.other(), f)?).abs());
+            apart(mid.frame)? + apart(s.end)?
+        } else {
+            (self.heel_x(side, s.end)? - self.heel_x(side, s.start)?).abs()
+        };
+        Some(px / self.per)
     }
 
     /// Per step of `side` (the other foot's heel strike to this foot's next one) that `step_ok`
@@ -218,13 +239,19 @@ pub fn compute(
     strides: &[Stride],
     step_ok: &dyn Fn(usize, usize) -> bool,
     cfg: &KinematicsConfig,
+    ground_moves: bool,
 ) -> Vec<Param> {
     let scale = px_per_cm(t, cfg);
     let (len_unit, per) = match scale {
         Some(s) => ("cm", s),
         None => ("px", 1.0),
     };
-    let m = Measure { t, events, per };
+    let m = Measure {
+        t,
+        events,
+        per,
+        ground_moves,
+    };
     let per_side: Vec<(Side, [Vec<f64>; 6])> = Side::BOTH
         .iter()
         .map(|&side| {
