@@ -263,6 +263,24 @@ impl InputInfo {
     pub fn frames_at(&self, size: Option<(u32, u32)>) -> Result<FrameReader, PipelineError> {
         self.frames_as(Request {
             size,
+            ..self.request()
+        })
+    }
+
+    /// As [`Self::frames`], from frame `from` on: the frames before it are
+    /// not read (a video's are decoded but not converted or sent).
+    pub fn frames_from(&self, from: usize) -> Result<FrameReader, PipelineError> {
+        self.frames_as(Request {
+            from,
+            ..self.request()
+        })
+    }
+
+    /// How every pass decodes this video: its stream, its frames resampled to a constant rate,
+    /// converted to standard range and deinterlaced where it needs it; all frames, full size.
+    fn request(&self) -> Request {
+        Request {
+            size: None,
             from: 0,
             resample: self.resampled_fps(),
             stream: self.stream,
@@ -274,26 +292,7 @@ impl InputInfo {
                 .interlaced
                 .as_deref()
                 .and_then(crate::picture::deinterlace),
-        })
-    }
-
-    /// As [`Self::frames`], from frame `from` on: the frames before it are
-    /// not read (a video's are decoded but not converted or sent).
-    pub fn frames_from(&self, from: usize) -> Result<FrameReader, PipelineError> {
-        self.frames_as(Request {
-            size: None,
-            from,
-            resample: self.resampled_fps(),
-            stream: self.stream,
-            standard_range: self
-                .hdr_transfer
-                .as_deref()
-                .and_then(crate::picture::to_standard_range),
-            deinterlace: self
-                .interlaced
-                .as_deref()
-                .and_then(crate::picture::deinterlace),
-        })
+        }
     }
 
     fn resampled_fps(&self) -> Option<f64> {

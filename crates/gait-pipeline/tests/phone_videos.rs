@@ -85,11 +85,7 @@ fn a_variable_frame_rate_is_decoded_at_the_camera_rate() {
     assert!((59..=60).contains(&frames.len()), "{}", frames.len());
     assert!(frames[21].image == frames[20].image);
     assert!(frames[20].image != frames[19].image && frames[22].image != frames[21].image);
-    assert!(
-        info.decode_warnings()
-            .iter()
-            .any(|w| w.contains("resampled"))
-    );
+    assert!(warns(&info, "resampled"));
 }
 
 /// An HLG clip (testsrc made HLG by zscale, losslessly stored) is decoded to the standard
@@ -130,11 +126,7 @@ fn an_hdr_video_is_decoded_to_standard_range() {
     ]);
     let info = InputInfo::open(&hlg).unwrap();
     assert_eq!(info.hdr_transfer.as_deref(), Some("arib-std-b67"));
-    assert!(
-        info.decode_warnings()
-            .iter()
-            .any(|w| w.contains("HDR (HLG)"))
-    );
+    assert!(warns(&info, "HDR (HLG)"));
     let (a, b) = (
         all_frames(&info),
         all_frames(&InputInfo::open(&sdr).unwrap()),
@@ -195,11 +187,7 @@ fn an_interlaced_video_is_deinterlaced() {
     ]);
     let info = InputInfo::open(&clip).unwrap();
     assert_eq!(info.interlaced.as_deref(), Some("tt"));
-    assert!(
-        info.decode_warnings()
-            .iter()
-            .any(|w| w.contains("interlaced"))
-    );
+    assert!(warns(&info, "interlaced"));
     let mut woven = info.clone();
     woven.interlaced = None;
     let (a, b) = (all_frames(&info), all_frames(&woven));
@@ -213,6 +201,11 @@ fn an_interlaced_video_is_deinterlaced() {
         after < 0.7 * before,
         "{before:.1} -> {after:.1} grey levels"
     );
+}
+
+/// Whether the reader of `info` warned with `text`.
+fn warns(info: &InputInfo, text: &str) -> bool {
+    info.decode_warnings().iter().any(|w| w.contains(text))
 }
 
 /// The mean absolute difference of two frames' RGB values, in grey levels.
