@@ -5,6 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::config::Side;
+use crate::direction::Directions;
 use crate::tracks::{Tracks, dist, median};
 
 /// `kinematics.view`: what the camera saw, or `auto` to decide from the keypoints.
@@ -154,6 +155,30 @@ pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> 
     }
 }
 
+/// A side view declared for one side (a visit's `--left`, `--right`) whose walker shows the
+/// other side to the camera in most frames: the warning that names it, else `None`. The walk's
+/// direction across the image says which leg is near: walking toward the image's right, the
+/// subject's right side faces the camera.
+pub fn side_disagreement(declared: ViewSetting, dirs: &Directions) -> Option<String> {
+    let want = match declared {
+        ViewSetting::Left => Side::Left,
+        ViewSetting::Right => Side::Right,
+        _ => return None,
+    };
+    let seen = dirs.near_side()?;
+    let [right, left, _] = dirs.counts();
+    (seen != want).then(|| {
+        format!(
+            "the keypoints disagree with kinematics.view = \"{}\": the {} leg is nearer the camera (the walker moves toward the image's {} in {} of {} frames with a direction); analysed as declared",
+            declared.name(),
+            seen.name(),
+            seen.name(),
+            right.max(left),
+            right + left
+        )
+    })
+}
+
 /// Share of the frames (with both hips and a knee seen) that look frontal: the hips apart by
 /// more than half a thigh, or the shoulders apart by more than half the trunk's length. Seen
 /// from the side both pairs overlap; from the front or back a pose model's hips lie about
@@ -264,4 +289,42 @@ fn growth(t: &Tracks) -> f64 {
     }
     let span = pts[pts.len() - 1].0 - pts[0].0;
     (sxy / sxx * span).exp()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::direction::Direction;
+
+    fn walking(right: usize, left: usize) -> Directions {
+        let mut per_frame = vec![Direction::Right; right];
+        per_frame.extend(vec![Direction::Left; left]);
+        per_frame.push(Direction::Unknown);
+        Directions {
+            frontal: vec![false; per_frame.len()],
+            per_frame,
+        }
+    }
+
+    /// A pass given as the right view whose walker shows her left side (the sample, walking
+    /// toward the image's left) is named; the right label on it, auto and frontal views are not.
+    #[test]
+    fn a_side_view_showing_the_other_side_is_named() {
+        let to_the_left = walking(3, 140);
+        let w = side_disagreement(ViewSetting::Right, &to_the_left).unwrap();
+        assert!(
+            w.contains("view = \"right\": the left leg is nearer"),
+            "{w}"
+        );
+        assert!(w.contains("140 of 143"), "{w}");
+        assert!(side_disagreement(ViewSetting::Left, &to_the_left).is_none());
+        for declared in [
+            ViewSetting::Auto,
+            ViewSetting::Anterior,
+            ViewSetting::Posterior,
+        ] {
+            assert!(side_disagreement(declared, &to_the_left).is_none());
+        }
+        assert!(side_disagreement(ViewSetting::Left, &walking(0, 0)).is_none());
+    }
 }
