@@ -49,12 +49,13 @@ def _row_sets(r):
 
 
 def _references(gait, work, n_rows):
-    """Each row's undisturbed run, outside Slurm, side by side."""
+    """Each row's undisturbed run, outside Slurm, side by side, with the study row's settings:
+    its `set` column and its `view` (races.write_study's "left")."""
     refs = [work / f"undisturbed-slurm-{r + 1}" for r in range(n_rows)]
     procs = []
     for r, ref in enumerate(refs):
         shutil.rmtree(ref, ignore_errors=True)
-        procs.append(gait.start(ref, _row_sets(r)))
+        procs.append(gait.start(ref, [*_row_sets(r), 'kinematics.view="left"']))
     for p in procs:
         _, err = p.communicate()
         if p.returncode != 0:

@@ -268,7 +268,7 @@ fn run_chain(
         Some(_) => direction::Directions::unknown(n),
         None => directions(t, &mut warnings),
     };
-    warnings.extend(view::side_disagreement(view.declared, &dirs));
+    warnings.extend(view::side_disagreement(view.declared, &dirs, t.fps));
     let angles = angles::compute(t, &dirs.per_frame);
     feet::warn_missing_toes(t, &mut warnings);
 

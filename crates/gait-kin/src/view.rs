@@ -155,11 +155,17 @@ pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> 
     }
 }
 
+/// Frames with a walking direction needed to judge a declared side (seconds) ...
+const SIDE_EVIDENCE_S: f64 = 1.0;
+/// ... and the share of them that must show the other side: a short clip, or someone else
+/// drawn for a few frames, is not evidence.
+const SIDE_MAJORITY: f64 = 0.75;
+
 /// A side view declared for one side (a visit's `--left`, `--right`) whose walker shows the
-/// other side to the camera in most frames: the warning that names it, else `None`. The walk's
-/// direction across the image says which leg is near: walking toward the image's right, the
-/// subject's right side faces the camera.
-pub fn side_disagreement(declared: ViewSetting, dirs: &Directions) -> Option<String> {
+/// other side to the camera in most of at least a second of frames (at `fps`): the warning that
+/// names it, else `None`. The walk's direction across the image says which leg is near:
+/// walking toward the image's right, the subject's right side faces the camera.
+pub fn side_disagreement(declared: ViewSetting, dirs: &Directions, fps: f64) -> Option<String> {
     let want = match declared {
         ViewSetting::Left => Side::Left,
         ViewSetting::Right => Side::Right,
@@ -167,14 +173,14 @@ pub fn side_disagreement(declared: ViewSetting, dirs: &Directions) -> Option<Str
     };
     let seen = dirs.near_side()?;
     let [right, left, _] = dirs.counts();
-    (seen != want).then(|| {
+    let (most, all) = (right.max(left), right + left);
+    let clear = all as f64 >= SIDE_EVIDENCE_S * fps && most as f64 >= SIDE_MAJORITY * all as f64;
+    (seen != want && clear).then(|| {
         format!(
-            "the keypoints disagree with kinematics.view = \"{}\": the {} leg is nearer the camera (the walker moves toward the image's {} in {} of {} frames with a direction); analysed as declared",
+            "the keypoints disagree with kinematics.view = \"{}\": the {} leg is nearer the camera (the walker moves toward the image's {} in {most} of {all} frames with a direction); analysed as declared",
             declared.name(),
             seen.name(),
             seen.name(),
-            right.max(left),
-            right + left
         )
     })
 }
@@ -307,24 +313,30 @@ mod tests {
     }
 
     /// A pass given as the right view whose walker shows her left side (the sample, walking
-    /// toward the image's left) is named; the right label on it, auto and frontal views are not.
+    /// toward the image's left) is named; the right label on it, auto and frontal views are not,
+    /// nor a short clip or one without a clear majority.
     #[test]
     fn a_side_view_showing_the_other_side_is_named() {
-        let to_the_left = walking(3, 140);
-        let w = side_disagreement(ViewSetting::Right, &to_the_left).unwrap();
+        let judge =
+            |declared, right, left| side_disagreement(declared, &walking(right, left), 30.0);
+        let w = judge(ViewSetting::Right, 3, 140).unwrap();
         assert!(
             w.contains("view = \"right\": the left leg is nearer"),
             "{w}"
         );
         assert!(w.contains("140 of 143"), "{w}");
-        assert!(side_disagreement(ViewSetting::Left, &to_the_left).is_none());
+        assert!(judge(ViewSetting::Left, 3, 140).is_none());
         for declared in [
             ViewSetting::Auto,
             ViewSetting::Anterior,
             ViewSetting::Posterior,
         ] {
-            assert!(side_disagreement(declared, &to_the_left).is_none());
+            assert!(judge(declared, 3, 140).is_none());
         }
-        assert!(side_disagreement(ViewSetting::Left, &walking(0, 0)).is_none());
+        assert!(judge(ViewSetting::Left, 0, 0).is_none());
+        // Under a second of frames with a direction, or no clear majority: not judged.
+        assert!(judge(ViewSetting::Left, 12, 1).is_none());
+        assert!(judge(ViewSetting::Left, 60, 40).is_none());
+        assert!(judge(ViewSetting::Left, 80, 20).is_some());
     }
 }
