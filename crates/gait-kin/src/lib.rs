@@ -323,15 +323,15 @@ fn run_chain(
         Some(_) => None,
         None => ground::measure(t, &events),
     };
-    if let Some(g) = ground.filter(ground::GroundMotion::moves) {
+    let moving = ground.filter(ground::GroundMotion::moves);
+    if let Some(g) = moving {
         warnings.push(format!(
             "the ground moves in the image at {:.0} % of the walking speed (a camera following the walker, or a treadmill): stride lengths and speeds are taken from the steps, each measured within one frame",
             100.0 * g.share()
         ));
     }
-    let ground_moves = ground.is_some_and(|g| g.moves());
     let mut spatiotemporal =
-        spatiotemporal::compute(t, &events, &accepted, &step_ok, kin, ground_moves);
+        spatiotemporal::compute(t, &events, &accepted, &step_ok, kin, moving.is_some());
     let frontal = frontal_scale.as_ref().map(|scale| {
         // Lengths along the walk are depth in a front view: only the timing holds.
         spatiotemporal.retain(spatiotemporal::Param::is_temporal);
