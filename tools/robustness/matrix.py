@@ -9,6 +9,7 @@ noise runs to 9 of 10 seeds), else 0; the tables are written either way.
 
     python3 tools/robustness/matrix.py --gait target/debug/gait [--input VIDEO] [--work DIR]
         [--mode quick|full] [--variants a,b] [--seeds N] [--hold a,b,noise|all] [--json F] [--md F]
+        [--set key=value ...]
 
 quick (tools/test.sh): the variants of variants.QUICK, 2 px noise with 5 seeds; full
 (BENCHMARKS.md): every variant, 1/2/3 px with 10 seeds each, and ort against candle. Runs are
@@ -33,12 +34,14 @@ import variants  # noqa: E402
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 FAST = ["--set", "report.overlay=false", "--set", "report.pdf=false", "--set", "export.formats=[]",
         "--no-progress"]
+# Settings of every run of this call (`--set`): the matrix of a configuration other than the default.
+SETTINGS = []
 
 
 def run(gait, video, out, extra=()):
     """`gait run` into `out`; stderr lines returned. A folder of an earlier call keeps its cache,
     so only the stages whose inputs changed run again (the kinematics always do)."""
-    cmd = [str(gait), "run", "--input", str(video), "--out", str(out)] + FAST + list(extra)
+    cmd = [str(gait), "run", "--input", str(video), "--out", str(out)] + FAST + SETTINGS + list(extra)
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit(f"matrix: {' '.join(cmd)} failed ({p.returncode}): {p.stderr.strip()[-2000:]}")
@@ -108,7 +111,11 @@ def main():
     ap.add_argument("--tolerance-s", type=float, default=1 / 30)
     ap.add_argument("--json")
     ap.add_argument("--md")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a setting for every run (an ablation: the matrix of another configuration)")
     a = ap.parse_args()
+    for kv in a.set:
+        SETTINGS.extend(["--set", kv])
     gait = pathlib.Path(a.gait).resolve()
     work = pathlib.Path(a.work).resolve()
     (work / "videos").mkdir(parents=True, exist_ok=True)

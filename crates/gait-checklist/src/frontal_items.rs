@@ -15,6 +15,7 @@ pub const TRUNK: Item = Item {
     unit: "deg",
     view: "front or back",
     amputation: "both",
+    paired: false,
 };
 pub const HIKING: Item = Item {
     id: "hip_hiking",
@@ -23,6 +24,7 @@ pub const HIKING: Item = Item {
     unit: "deg",
     view: "front or back",
     amputation: "both",
+    paired: false,
 };
 pub const ABDUCTED: Item = Item {
     id: "abducted_gait",
@@ -31,6 +33,7 @@ pub const ABDUCTED: Item = Item {
     unit: "cm",
     view: "front or back",
     amputation: "both",
+    paired: false,
 };
 pub const CIRCUMDUCTION: Item = Item {
     id: "circumduction",
@@ -39,6 +42,7 @@ pub const CIRCUMDUCTION: Item = Item {
     unit: "cm",
     view: "front or back",
     amputation: "both",
+    paired: false,
 };
 
 /// The frames of a stride's stance (heel strike to toe-off; 60 % without a toe-off) or swing.

@@ -26,7 +26,8 @@ use serde::Serialize;
 
 pub use config::ChecklistConfig;
 pub use gait_kin::Side;
-pub use run_files::RunFiles;
+pub use run_files::{Param, RunFiles};
+pub use sagittal_items::pooled_timing;
 pub use verdict::{Item, Status, Verdict};
 
 #[derive(Debug, thiserror::Error)]

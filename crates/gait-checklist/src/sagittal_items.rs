@@ -15,6 +15,7 @@ pub const STEP_TIME: Item = Item {
     unit: "s",
     view: "side",
     amputation: "both",
+    paired: true,
 };
 pub const STANCE: Item = Item {
     id: "uneven_stance_time",
@@ -23,6 +24,7 @@ pub const STANCE: Item = Item {
     unit: "%",
     view: "side",
     amputation: "both",
+    paired: true,
 };
 pub const STEP_LENGTH: Item = Item {
     id: "uneven_step_length",
@@ -31,6 +33,7 @@ pub const STEP_LENGTH: Item = Item {
     unit: "",
     view: "side",
     amputation: "both",
+    paired: true,
 };
 pub const KNEE_FLEXION: Item = Item {
     id: "excessive_knee_flexion_stance",
@@ -39,6 +42,7 @@ pub const KNEE_FLEXION: Item = Item {
     unit: "deg",
     view: "side",
     amputation: "transtibial",
+    paired: false,
 };
 pub const KNEE_EXTENSION: Item = Item {
     id: "knee_hyperextension_stance",
@@ -47,6 +51,7 @@ pub const KNEE_EXTENSION: Item = Item {
     unit: "deg",
     view: "side",
     amputation: "transtibial",
+    paired: false,
 };
 
 pub const FOOT_SLAP: Item = Item {
@@ -56,6 +61,7 @@ pub const FOOT_SLAP: Item = Item {
     unit: "deg",
     view: "side",
     amputation: "both",
+    paired: false,
 };
 pub const TERMINAL_IMPACT: Item = Item {
     id: "terminal_swing_impact",
@@ -64,6 +70,7 @@ pub const TERMINAL_IMPACT: Item = Item {
     unit: "deg/%",
     view: "side",
     amputation: "transfemoral",
+    paired: true,
 };
 
 /// The symmetry items: each side's mean, present on the larger side when the symmetry index
@@ -178,6 +185,19 @@ fn extreme(
             })
         })
         .collect()
+}
+
+/// Uneven step time and uneven stance time judged once on `params`, spatiotemporal rows of
+/// several side-view runs pooled (a visit's), so both sides rest on the same comparison.
+pub fn pooled_timing(params: Vec<Param>, cfg: &ChecklistConfig) -> Vec<Verdict> {
+    let run = RunFiles {
+        view: "sagittal".into(),
+        spatiotemporal: params,
+        ..RunFiles::default()
+    };
+    let mut out = symmetry(&run, STEP_TIME, "step_time", cfg).to_vec();
+    out.extend(stance_ratio(&run, cfg));
+    out
 }
 
 /// The five side-view items for both sides.

@@ -13,6 +13,7 @@ pub const TRUNK_FLEXION: Item = Item {
     unit: "deg",
     view: "side",
     amputation: "both",
+    paired: false,
 };
 pub const ARM_SWING: Item = Item {
     id: "uneven_arm_swing",
@@ -21,6 +22,7 @@ pub const ARM_SWING: Item = Item {
     unit: "deg",
     view: "side",
     amputation: "both",
+    paired: true,
 };
 
 /// Degrees from the upward vertical of the line `from -> to`, positive toward the walking

@@ -19,6 +19,7 @@ pub const VAULTING: Item = Item {
     unit: "% leg",
     view: "side",
     amputation: "both",
+    paired: true,
 };
 
 /// Per accepted stride of `side` with a toe-off, the other heel's median rise

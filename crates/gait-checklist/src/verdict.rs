@@ -36,6 +36,9 @@ pub struct Item {
     pub view: &'static str,
     /// `transtibial`, `transfemoral` or `both`: the amputation levels the lists give it for.
     pub amputation: &'static str,
+    /// Judged by comparing the two sides (a symmetry index, one side over the other): both
+    /// sides' verdicts must come from one judgement, never one side from each of two runs.
+    pub paired: bool,
 }
 
 /// One item's verdict on one side.

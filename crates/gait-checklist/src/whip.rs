@@ -14,6 +14,7 @@ pub const WHIP: Item = Item {
     unit: "% leg",
     view: "back",
     amputation: "both",
+    paired: false,
 };
 
 /// Per accepted stride of `side` with a toe-off: the signed whip (lateral positive), % leg.

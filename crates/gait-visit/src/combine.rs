@@ -94,6 +94,21 @@ pub fn frontal(passes: &[Pass], sources: &mut Vec<Source>) -> (Vec<CycleCurve>, 
 /// Timing (stride and step time, stance, cadence) pooled over every pass where it was measured:
 /// means weighted by their counts, SDs pooled; the symmetry index from the pooled sides.
 pub fn spatiotemporal(passes: &[Pass]) -> Vec<StParam> {
+    pooled(&passes.iter().collect::<Vec<_>>())
+}
+
+/// The timing of the side views alone, pooled: what the checklist's timing items are judged
+/// on (they need a side view).
+pub fn side_view_timing(passes: &[Pass]) -> Vec<StParam> {
+    pooled(
+        &passes
+            .iter()
+            .filter(|p| !p.is_frontal())
+            .collect::<Vec<_>>(),
+    )
+}
+
+fn pooled(passes: &[&Pass]) -> Vec<StParam> {
     let mut out = Vec::new();
     for (parameter, sides) in [
         ("stride_time", &SIDES[..]),
@@ -168,34 +183,205 @@ fn pool(rows: &[&StParam]) -> Option<StParam> {
 
 /// Each item and side from the pass that judges it best: an assessable verdict before a
 /// not-assessable one; for a side-view item the side's own view (its limb near the camera)
-/// first; then the verdict resting on more cycles. Returns the verdicts with their pass.
-pub fn checklist(per_pass: &[(&Pass, Vec<Verdict>)]) -> Vec<(Verdict, String)> {
+/// first; then the verdict resting on more cycles. An item that compares the two sides takes
+/// both from one judgement: `pooled` (the timing items judged on the side views' pooled timing,
+/// and where that comes from) where it judged, else one pass that judges both sides, the view
+/// of `preferred` (the prosthetic side; else the left) first, so that visits compare alike.
+/// Returns the verdicts with their source.
+pub fn checklist(
+    per_pass: &[(&Pass, Vec<Verdict>)],
+    pooled: (&[Verdict], &str),
+    preferred: gait_checklist::Side,
+) -> Vec<(Verdict, String)> {
     let mut out: Vec<(Verdict, String)> = Vec::new();
     let Some((_, first)) = per_pass.first() else {
         return out;
     };
     for template in first {
         let (id, side) = (template.item.id, template.side);
-        let candidates = per_pass.iter().filter_map(|(p, vs)| {
+        let find = |vs: &[Verdict]| {
             vs.iter()
                 .find(|v| v.item.id == id && v.side == side)
-                .map(|v| (*p, v))
-        });
-        let rank = |(p, v): &(&Pass, &Verdict)| {
-            (
-                v.status != Status::NotAssessable,
-                v.item.view == "side" && p.view == side.name(),
-                p.cycles(side.name(), v.item.view != "side"),
-            )
+                .cloned()
         };
-        if let Some((p, v)) = candidates.max_by_key(rank) {
-            let from = if v.status == Status::NotAssessable {
-                String::new()
-            } else {
-                p.label()
+        if let Some(v) = find(pooled.0).filter(|v| v.status != Status::NotAssessable) {
+            out.push((v, pooled.1.to_string()));
+            continue;
+        }
+        let chosen = if template.item.paired {
+            per_pass
+                .iter()
+                .max_by_key(|(p, vs)| both_sides_rank(p, vs, id, preferred))
+                .and_then(|(p, vs)| Some((*p, find(vs)?)))
+        } else {
+            per_pass
+                .iter()
+                .filter_map(|(p, vs)| Some((*p, find(vs)?)))
+                .max_by_key(|(p, v)| {
+                    (
+                        v.status != Status::NotAssessable,
+                        v.item.view == "side" && p.view == side.name(),
+                        p.cycles(side.name(), v.item.view != "side"),
+                    )
+                })
+        };
+        if let Some((p, v)) = chosen {
+            let from = match (v.status, v.item.paired) {
+                (Status::NotAssessable, _) => String::new(),
+                (_, true) => format!("{}, both sides", p.label()),
+                _ => p.label(),
             };
-            out.push((v.clone(), from));
+            out.push((v, from));
         }
     }
     out
+}
+
+/// How well a pass judges the paired item `id`: on both sides, from the `preferred` side's
+/// view, then on the fewer cycles of its two sides.
+fn both_sides_rank(
+    p: &Pass,
+    vs: &[Verdict],
+    id: &str,
+    preferred: gait_checklist::Side,
+) -> (bool, bool, usize) {
+    let mine = vs.iter().filter(|v| v.item.id == id);
+    let judged = mine
+        .clone()
+        .filter(|v| v.status != Status::NotAssessable)
+        .count();
+    let frontal = mine.clone().any(|v| v.item.view != "side");
+    let fewer = p.cycles("left", frontal).min(p.cycles("right", frontal));
+    (judged == 2, p.view == preferred.name(), fewer)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::PathBuf;
+
+    use gait_checklist::{ChecklistConfig, Item, Param, Side};
+
+    use super::*;
+
+    const STEP_LENGTH: Item = Item {
+        id: "uneven_step_length",
+        name: "Uneven step length",
+        measure: "",
+        unit: "px",
+        view: "side",
+        amputation: "both",
+        paired: true,
+    };
+
+    fn pass(view: &str, left: usize, right: usize) -> Pass {
+        let curve = |side: &str, n| CycleCurve {
+            side: side.parse().unwrap(),
+            joint: "knee".into(),
+            percent: vec![0.0],
+            mean: vec![0.0],
+            sd: vec![0.0],
+            n_cycles: n,
+        };
+        Pass {
+            view: view.into(),
+            video: PathBuf::from(format!("{view}.mp4")),
+            dir: PathBuf::new(),
+            sagittal: vec![curve("left", left), curve("right", right)],
+            frontal: Vec::new(),
+            spatiotemporal: Vec::new(),
+            status: "done".into(),
+            fps: Some(30.0),
+            warnings: Vec::new(),
+        }
+    }
+
+    /// A pass's step-length verdicts: `present` names the side that pass finds longer.
+    fn step_length(present: Side, value: f64) -> Vec<Verdict> {
+        Side::BOTH
+            .map(|side| {
+                let mut v = Verdict::not_assessable(STEP_LENGTH, side, "");
+                v.status = if side == present {
+                    Status::Present
+                } else {
+                    Status::Absent
+                };
+                v.value = value;
+                v
+            })
+            .to_vec()
+    }
+
+    /// Two side views that disagree on which step is longer (the sample and its mirror, each
+    /// finding the far limb's step longer): the visit once took each side from its own view and
+    /// so dropped both findings; both sides now come from one pass, the prosthetic side's view.
+    #[test]
+    fn a_paired_item_takes_both_sides_from_one_pass() {
+        let (left, right) = (pass("left", 2, 3), pass("right", 3, 3));
+        let per_pass = vec![
+            (&left, step_length(Side::Right, 1.0)),
+            (&right, step_length(Side::Left, 2.0)),
+        ];
+        let got = checklist(&per_pass, (&[], ""), Side::Right);
+        let status: Vec<_> = got
+            .iter()
+            .map(|(v, from)| (v.side, v.status, from.as_str()))
+            .collect();
+        assert_eq!(
+            status,
+            [
+                (
+                    Side::Left,
+                    Status::Present,
+                    "right view (right.mp4), both sides"
+                ),
+                (
+                    Side::Right,
+                    Status::Absent,
+                    "right view (right.mp4), both sides"
+                ),
+            ]
+        );
+    }
+
+    /// The timing items are judged on the side views' pooled timing when it judges them.
+    #[test]
+    fn the_timing_items_come_from_the_pooled_side_views() {
+        let param = |side: &str, mean| Param {
+            parameter: "step_time".into(),
+            side: side.into(),
+            mean,
+            sd: 0.01,
+            n: 4,
+            unit: "s".into(),
+        };
+        let cfg = ChecklistConfig::default();
+        let pooled =
+            gait_checklist::pooled_timing(vec![param("left", 0.70), param("right", 0.55)], &cfg);
+        let step_time = |side| {
+            let mut v = pooled
+                .iter()
+                .find(|v| v.item.id == "uneven_step_time" && v.side == side)
+                .unwrap()
+                .clone();
+            v.status = Status::Absent;
+            v
+        };
+        let (left, right) = (pass("left", 2, 2), pass("right", 2, 2));
+        let per_pass = vec![
+            (&left, vec![step_time(Side::Left), step_time(Side::Right)]),
+            (&right, vec![step_time(Side::Left), step_time(Side::Right)]),
+        ];
+        let got = checklist(&per_pass, (&pooled, "pooled"), Side::Left);
+        let status: Vec<_> = got
+            .iter()
+            .map(|(v, from)| (v.side, v.status, from.as_str()))
+            .collect();
+        assert_eq!(
+            status,
+            [
+                (Side::Left, Status::Present, "pooled"),
+                (Side::Right, Status::Absent, "pooled")
+            ]
+        );
+    }
 }

@@ -167,7 +167,26 @@ fn judge_each(
         )?;
         per_pass.push((p, list.verdicts));
     }
-    Ok(combine::checklist(&per_pass))
+    let timing = combine::side_view_timing(passes)
+        .into_iter()
+        .map(|r| gait_checklist::Param {
+            parameter: r.parameter,
+            side: r.side,
+            mean: r.mean,
+            sd: r.sd,
+            n: r.n,
+            unit: r.unit,
+        })
+        .collect();
+    let pooled = gait_checklist::pooled_timing(timing, o.checklist);
+    let sides: Vec<String> = passes
+        .iter()
+        .filter(|p| !p.is_frontal())
+        .map(Pass::label)
+        .collect();
+    let from = format!("the side views' timing pooled: {}", sides.join(" + "));
+    let preferred = o.prosthetic.unwrap_or(Side::Left);
+    Ok(combine::checklist(&per_pass, (&pooled, &from), preferred))
 }
 
 #[cfg(test)]

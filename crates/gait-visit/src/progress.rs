@@ -132,7 +132,8 @@ pub struct Change {
 /// Step and stance times: their MDC95 on the bundled sample (gait-eval's reliability table).
 /// Angles: 2 deg, the frontal angles' error under BlazePose-level jitter on projected motion
 /// capture (1-2.6 deg, BENCHMARKS.md) and the sample's hip peak MDC95 (2.0-3.2 deg). Lengths:
-/// 2 cm, the step width's accuracy target (0.025 leg lengths without a scale).
+/// 2 cm, the step width's accuracy target (0.025 leg lengths without a scale; 2.5 % of the leg
+/// for the heights and shifts measured in % of the leg: vaulting, whips).
 pub fn floor(item: &str, unit: &str) -> (f64, &'static str) {
     let mdc = match item {
         "uneven_step_time" => gait_eval::reliability::mdc("step_time", "s"),
@@ -146,6 +147,7 @@ pub fn floor(item: &str, unit: &str) -> (f64, &'static str) {
         "deg" => (2.0, "2 deg: the angles' error under pose-model jitter"),
         "cm" => (2.0, "2 cm: the step width's accuracy"),
         "leg" => (0.025, "0.025 leg lengths: the step width's accuracy"),
+        "% leg" => (2.5, "2.5 % of the leg: the step width's accuracy"),
         _ => (0.0, ""),
     }
 }
@@ -231,7 +233,7 @@ pub fn write(out: &Path, visits: &[VisitRecord]) -> Result<Vec<Change>, VisitErr
     })?;
     let subject = visits.first().map_or("", |v| v.label.subject.as_str());
     let mut html = format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Progress: {subject}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:24px auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:13px}}td.change{{font-weight:bold}}</style></head><body><h1>Progress across visits: {subject}</h1><p>Each checklist measure visit by visit (mean ± SD over its cycles, n cycles). A difference between two visits is called a change when it exceeds 1.96 × √(SD₁²/n₁ + SD₂²/n₂), the spread the cycles of the two visits alone could make, and the measure's floor: the minimal detectable change of re-encoding and keypoint noise for step and stance times, 2 deg for angles (their error under pose-model jitter), 2 cm for lengths; visits with one cycle are not judged.</p><table><tr><th>Item</th><th>Side</th>"
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Progress: {subject}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:24px auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:13px}}td.change{{font-weight:bold}}</style></head><body><h1>Progress across visits: {subject}</h1><p>Each checklist measure visit by visit (mean ± SD over its cycles, n cycles). A difference between two visits is called a change when it exceeds 1.96 × √(SD₁²/n₁ + SD₂²/n₂), the spread the cycles of the two visits alone could make, and the measure's floor: the minimal detectable change of re-encoding and keypoint noise for step and stance times, 2 deg for angles (their error under pose-model jitter), 2 cm for lengths (2.5 % of the leg for heights in % of the leg); visits with one cycle are not judged.</p><table><tr><th>Item</th><th>Side</th>"
     );
     for v in visits {
         html.push_str(&format!("<th>{}</th>", v.name()));
@@ -372,5 +374,21 @@ mod tests {
         assert!(
             calls(visit("1", 3.0, f64::NAN, 1), visit("2", 9.0, 1.0, 4)).starts_with("not judged")
         );
+    }
+
+    /// Vaulting in % of the leg on clean motion capture (SDs of a few hundredths): 0.09 % of
+    /// the leg, under a millimetre, was called a change before the unit had a floor.
+    #[test]
+    fn a_height_in_percent_of_the_leg_has_a_floor() {
+        let vaulting = |session, value| {
+            let mut v = visit(session, value, 0.02, 4);
+            v.rows[0].item = "vaulting".into();
+            v.rows[0].unit = "% leg".into();
+            v
+        };
+        let c = changes(&[vaulting("1", -0.50), vaulting("2", -0.41)]);
+        assert_eq!(c[0].call, "no change");
+        let c = changes(&[vaulting("1", -0.50), vaulting("2", -3.5)]);
+        assert_eq!(c[0].call, "change");
     }
 }
