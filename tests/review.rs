@@ -230,6 +230,20 @@ fn the_page_saves_corrections_that_gait_kin_reproduces() {
         .collect();
     assert_eq!(shown, events);
     assert!(events.contains(&"right,heel_strike,60".to_string()));
+
+    // The page's checklist, recomputed with the corrections, is the one `gait kin` writes.
+    let mut r = csv::Reader::from_path(kin.join("checklist.csv")).unwrap();
+    let written: Vec<(String, String, String)> = r
+        .records()
+        .map(|x| x.unwrap())
+        .map(|x| (x[0].to_string(), x[1].to_string(), x[2].replace(' ', "_")))
+        .collect();
+    let shown: Vec<(String, String, String)> =
+        serde_json::from_value(page["checklist"].clone()).unwrap();
+    assert_eq!(shown, written);
+    assert!(written.len() > 20, "{written:?}");
+    let panel = page["checklist_panel"].as_str().unwrap();
+    assert!(panel.contains("absent:"), "the checklist panel shows {panel:?}");
 }
 
 #[test]

@@ -152,7 +152,9 @@ async function main() {
     const after = await state(() => {
       const S = window.gaitReview;
       return { corrections: S.history[0], first_frame: S.an.first_frame, angles: S.an.angles,
-        events: S.an.events, undo_disabled: document.getElementById('undo').disabled };
+        events: S.an.events, undo_disabled: document.getElementById('undo').disabled,
+        checklist: S.an.checklist.map((v) => [v.item.id, v.side, v.status]),
+        checklist_panel: document.getElementById('checklist').textContent };
     });
     check(after.undo_disabled, 'undo is offered right after a reload');
     const result = { ...after, dragged, timings, problems, offsite,

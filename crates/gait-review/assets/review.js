@@ -305,12 +305,38 @@
       `<td>${escapeHtml(p.unit)}</td><td>${p.n}</td></tr>`).join('');
     $('spatiotemporal').innerHTML = st ? `<table><tr><th>parameter</th><th>side</th><th>mean ± SD</th><th>unit</th><th>n</th></tr>${st}</table>` : 'none';
     $('warnings').innerHTML = S.an.warnings.map((w) => `<li>${escapeHtml(w)}</li>`).join('') || '<li>none</li>';
+    drawChecklist();
     markCurrentRows();
+  }
+
+  // The items present, each with the cycles where it shows (a row is marked while the current
+  // frame is inside one of them) and the frame where it shows most; then what was not judged.
+  function drawChecklist() {
+    const fmt = (x) => (x === null || x === undefined ? '–' : Number(x).toFixed(1));
+    const cycleOf = (side, first) => S.an.cycles.find((q) => q.side === side && q.first_frame === first);
+    const rows = S.an.checklist.filter((v) => v.status === 'present').map((v) => {
+      const ranges = v.cycles.map((f) => { const q = cycleOf(v.side, f); return q ? `${q.first_frame}-${q.last_frame}` : `${f}-${f}`; });
+      const spread = v.spread === null || v.n < 2 ? '' : ` ± ${fmt(v.spread)}`;
+      return `<tr data-ranges="${ranges.join(';')}"><td>${escapeHtml(v.item.name)}</td><td>${v.side}</td>` +
+        `<td>${fmt(v.value)}${spread} ${escapeHtml(v.unit)} (${v.beyond} ${fmt(v.threshold)} ${escapeHtml(v.threshold_unit)}), n = ${v.n}</td>` +
+        `<td>${v.frames.map(frameLink).join(', ') || '–'}</td></tr>`;
+    }).join('');
+    const count = (status) => S.an.checklist.filter((v) => v.status === status).length;
+    const absent = count('absent'), unjudged = count('not_assessable');
+    $('checklist').innerHTML = (rows
+      ? `<table><tr><th>present</th><th>side</th><th>measure (threshold)</th><th>frames</th></tr>${rows}</table>`
+      : '<p>no deviation present</p>') +
+      `<p class="hint">absent: ${absent} item-sides; not assessable here: ${unjudged} (the view or keypoints they need)</p>`;
   }
 
   function markCurrentRows() {
     document.querySelectorAll('[data-frame-row]').forEach((tr) =>
       tr.classList.toggle('current', Number(tr.dataset.frameRow) === S.frame));
+    document.querySelectorAll('[data-ranges]').forEach((tr) =>
+      tr.classList.toggle('current', tr.dataset.ranges.split(';').some((r) => {
+        const [a, b] = r.split('-').map(Number);
+        return S.frame >= a && S.frame <= b;
+      })));
   }
 
   function removeEvent(e) {

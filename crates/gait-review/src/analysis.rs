@@ -3,6 +3,7 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+use gait_checklist::Verdict;
 use gait_core::keypoint::LOWER_LIMB;
 use gait_kin::{Bout, Corrections, CycleQuality, Event, KinResult, Param, SideCounts};
 use serde::Serialize;
@@ -30,6 +31,8 @@ pub struct AnalysisView {
     pub rejected: SideCounts,
     pub spatiotemporal: Vec<Param>,
     pub warnings: Vec<String>,
+    /// The gait-deviation checklist of this result (as the run's checklist.csv would be).
+    pub checklist: Vec<Verdict>,
     /// The corrections applied, as saved.
     pub corrections: Corrections,
     /// Seconds the recomputation took on the server.
@@ -37,7 +40,7 @@ pub struct AnalysisView {
 }
 
 impl AnalysisView {
-    fn new(r: KinResult, corrections: &Corrections, seconds: f64) -> Self {
+    fn new(r: KinResult, checklist: Vec<Verdict>, corrections: &Corrections, seconds: f64) -> Self {
         let mut angles = BTreeMap::new();
         for (side, leg) in [("left", &r.angles.left), ("right", &r.angles.right)] {
             for (joint, v) in [
@@ -79,6 +82,7 @@ impl AnalysisView {
             rejected: r.cycles_rejected,
             spatiotemporal: r.spatiotemporal,
             warnings: r.warnings,
+            checklist,
             corrections: corrections.clone(),
             seconds,
         }
@@ -95,7 +99,11 @@ pub fn toml_bytes(c: &Corrections) -> Vec<u8> {
 pub fn recompute(src: &ReviewSource, c: &Corrections) -> Result<AnalysisView, gait_kin::KinError> {
     let t = Instant::now();
     let sha = gait_kin::corrections::sha256_hex(&toml_bytes(c));
-    let r =
+    let mut r =
         gait_kin::analyse_corrected(&src.seq, &src.post, &src.kin, c, &src.corrections_path, sha)?;
-    Ok(AnalysisView::new(r, c, t.elapsed().as_secs_f64()))
+    let list = crate::checklist::judge(&r, &src.checklist).unwrap_or_else(|why| {
+        r.warnings.push(why);
+        Vec::new()
+    });
+    Ok(AnalysisView::new(r, list, c, t.elapsed().as_secs_f64()))
 }

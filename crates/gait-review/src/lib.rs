@@ -9,6 +9,7 @@
 //! server writes. No model runs.
 
 mod analysis;
+mod checklist;
 mod error;
 mod frames;
 mod page;

@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use gait_core::PoseSequence;
 use gait_kin::{Corrections, KinematicsConfig, PostprocessConfig};
 use gait_pipeline::PipelineConfig;
+
+use crate::checklist::ChecklistSettings;
 use gait_pipeline::input::InputInfo;
 use serde_json::Value;
 
@@ -34,6 +36,8 @@ pub struct ReviewSource {
     pub subject: Option<Value>,
     /// The command that writes the run's outputs again with the saved corrections.
     pub rerun: String,
+    /// How the page's checklist is judged (the run's settings).
+    pub checklist: ChecklistSettings,
 }
 
 fn read_json(path: &Path) -> Result<Value, ReviewError> {
@@ -175,6 +179,7 @@ impl ReviewSource {
             regenerated,
             frame_size,
             subject: manifest.get("subject").filter(|s| !s.is_null()).cloned(),
+            checklist: ChecklistSettings::of(&config),
             rerun: format!(
                 "gait run --config {0}/run.json --input {input} --out {0}",
                 dir.display()
@@ -258,6 +263,7 @@ impl ReviewSource {
             regenerated: None,
             frame_size,
             subject: None,
+            checklist: ChecklistSettings::of(&config),
         })
     }
 }
