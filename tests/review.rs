@@ -243,7 +243,10 @@ fn the_page_saves_corrections_that_gait_kin_reproduces() {
     assert_eq!(shown, written);
     assert!(written.len() > 20, "{written:?}");
     let panel = page["checklist_panel"].as_str().unwrap();
-    assert!(panel.contains("absent:"), "the checklist panel shows {panel:?}");
+    assert!(
+        panel.contains("absent:"),
+        "the checklist panel shows {panel:?}"
+    );
 }
 
 #[test]
