@@ -5,8 +5,11 @@ Each variant of the matrix and each noise seed is one more measurement of the sa
 the measure's values x_1..x_k (the original's and each repeat's), the standard error of
 measurement is SEM = SD(x) and MDC95 = 1.96 * sqrt(2) * SEM, the usual test-retest definition
 (two measurements, 95 % confidence). Measures: the spatiotemporal parameters and symmetry
-indices (spatiotemporal.csv) and each joint's peak flexion, extension and range of motion over
-the mean cycle (cycles.csv), per side."""
+indices (spatiotemporal.csv), each joint's peak flexion, extension and range of motion over
+the mean cycle (cycles.csv), per side, and each checklist item's measure (checklist.csv, as
+`checklist ITEM SIDE (UNIT)`; not those in image pixels), which `gait progress` floors its calls
+with."""
+import csv
 import math
 import pathlib
 
@@ -26,6 +29,23 @@ def measures(folder, fps, offset_s=0.0, mirrored=False, scale=1.0):
             out[f"{side} {joint} peak flexion (deg)"] = max(vals)
             out[f"{side} {joint} peak extension (deg)"] = min(vals)
             out[f"{side} {joint} range (deg)"] = max(vals) - min(vals)
+    out.update(checklist(folder, mirrored))
+    return out
+
+
+def checklist(folder, mirrored=False):
+    """`checklist ITEM SIDE (UNIT)` -> value for the items checklist.csv judged (any verdict)."""
+    path = pathlib.Path(folder) / "checklist.csv"
+    if not path.exists():
+        return {}
+    out = {}
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            v = compare.num(r["value"])
+            if not math.isfinite(v) or r["unit"].startswith("px"):
+                continue
+            side = compare.OTHER.get(r["side"], r["side"]) if mirrored else r["side"]
+            out[f"checklist {r['item']} {side} ({r['unit']})"] = v
     return out
 
 

@@ -55,6 +55,54 @@ pub fn judge(
     unit: &str,
     none: &str,
 ) -> Verdict {
+    judged(item, side, samples, 0.0, t, (unit, none))
+}
+
+/// As [`judge`], on each of `own`'s values less the mean of `other`'s (the same measure of the
+/// other side). The standard error of the result holds both sides' (a side's mean is compared
+/// with the other's, not with a known value), and so does the spread reported with it: one
+/// stride of the other side misplaced by the pose model moves this side's value too.
+pub fn judge_over_other(
+    item: Item,
+    side: Side,
+    (own, other): (&[Sample], &[Sample]),
+    t: Threshold,
+    unit: &str,
+    none: &str,
+) -> Verdict {
+    let values: Vec<f64> = other
+        .iter()
+        .map(|s| s.value)
+        .filter(|v| v.is_finite())
+        .collect();
+    if values.is_empty() {
+        return Verdict::not_assessable(item, side, none);
+    }
+    let (base, sd) = mean_sd(&values);
+    let base_var = if sd.is_finite() {
+        sd * sd / values.len() as f64
+    } else {
+        0.0
+    };
+    let less: Vec<Sample> = own
+        .iter()
+        .map(|s| Sample {
+            value: s.value - base,
+            ..*s
+        })
+        .collect();
+    judged(item, side, &less, base_var, t, (unit, none))
+}
+
+/// [`judge`] with `base_var`, the variance of a baseline subtracted from every sample.
+fn judged(
+    item: Item,
+    side: Side,
+    samples: &[Sample],
+    base_var: f64,
+    t: Threshold,
+    (unit, none): (&str, &str),
+) -> Verdict {
     let values: Vec<f64> = samples
         .iter()
         .map(|s| s.value)
@@ -63,7 +111,13 @@ pub fn judge(
     if values.is_empty() || !t.value.is_finite() {
         return Verdict::not_assessable(item, side, none);
     }
-    let (mean, spread) = mean_sd(&values);
+    let (mean, own_sd) = mean_sd(&values);
+    // The spread whose standard error over these samples is the mean's whole standard error.
+    let spread = if base_var > 0.0 && own_sd.is_finite() {
+        (own_sd * own_sd + base_var * values.len() as f64).sqrt()
+    } else {
+        own_sd
+    };
     let hits: Vec<&Sample> = samples.iter().filter(|s| t.passed(s.value)).collect();
     // Present when the side's cycles show it consistently: the mean lies past the threshold by
     // at least its standard error. One deviant cycle among two or three (a pose model's foot
@@ -162,6 +216,36 @@ mod tests {
             "none",
         );
         assert_eq!((v.status, v.cycles), (Status::Absent, vec![0]));
+    }
+
+    /// A side judged against the other side's mean carries that mean's uncertainty: on the
+    /// sample's sensor-noise copy one misplaced stride of the right heel (rises 1, 2, 27 % of
+    /// the leg) put the left's vaulting at -10 +- 2.6 over its own two strides, which `gait
+    /// progress` then called a change from its -3.0 +- 0.2.
+    #[test]
+    fn a_value_over_the_other_side_s_mean_carries_that_mean_s_spread() {
+        let (own, other) = (at(&[0.0, 1.0]), at(&[1.0, 2.0, 27.0]));
+        let v = judge_over_other(
+            TRUNK,
+            Side::Left,
+            (&own, &other),
+            t(5.0, "above"),
+            "% leg",
+            "none",
+        );
+        assert!((v.value - (0.5 - 10.0)).abs() < 1e-12, "{}", v.value);
+        let other_var = ((9.0f64).powi(2) + 8.0f64.powi(2) + 17.0f64.powi(2)) / 2.0 / 3.0;
+        let se = (0.5f64 / 2.0 + other_var).sqrt();
+        assert!(
+            (v.spread / 2f64.sqrt() - se).abs() < 1e-9,
+            "{} vs {se}",
+            v.spread
+        );
+        assert!(
+            v.spread > 10.0,
+            "the other side's outlier is in the spread: {}",
+            v.spread
+        );
     }
 
     /// One deviant cycle that carries the mean past the threshold is not a deviation of the

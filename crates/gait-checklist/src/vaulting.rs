@@ -7,7 +7,7 @@
 //! walker (the bundled sample) already shows a heel 4-7 % of a leg up there on
 //! both sides, from the pose model's heel point and her own early heel rise.
 
-use crate::judge::{Sample, Threshold, judge};
+use crate::judge::{Sample, Threshold, judge_over_other};
 use crate::run_files::RunFiles;
 use crate::verdict::{Item, Verdict};
 use crate::{ChecklistConfig, Side};
@@ -71,7 +71,6 @@ fn rises(run: &RunFiles, side: Side) -> Vec<Sample> {
 /// Vaulting over each side (the other foot rising while it swings), each
 /// stride's rise less the other side's mean rise.
 pub fn assess(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
-    let mean = |v: &[Sample]| v.iter().map(|s| s.value).sum::<f64>() / v.len() as f64;
     let both = Side::BOTH.map(|s| rises(run, s));
     Side::BOTH.map(|side| {
         if run.view != "sagittal" {
@@ -90,10 +89,8 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
             let why = "needs accepted strides with toe-offs of both sides";
             return Verdict::not_assessable(VAULTING, side, why);
         }
-        let base = mean(other);
-        let samples: Vec<Sample> = own.iter().map(|s| Sample { value: s.value - base, ..*s }).collect();
         let none = "no accepted stride of this side with its toe-off and the other heel";
-        judge(VAULTING, side, &samples, t, "% leg", none)
+        judge_over_other(VAULTING, side, (own, other), t, "% leg", none)
     })
 }
 

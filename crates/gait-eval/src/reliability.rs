@@ -27,7 +27,18 @@ pub fn mdc(parameter: &str, unit: &str) -> Option<f64> {
 
 /// MDC95 of a joint angle's measure (`ankle`, `peak extension`), the larger over the sides.
 pub fn angle_mdc(joint: &str, measure: &str) -> Option<f64> {
-    let rows = ["left", "right"].map(|s| format!("\"{s} {joint} {measure} (deg)\","));
+    larger_of(["left", "right"].map(|s| format!("\"{s} {joint} {measure} (deg)\",")))
+}
+
+/// MDC95 of a checklist item's measure in `unit` (`vaulting`, `% leg`), the larger over the
+/// sides, where the matrix measured it: the side-view items (its walk is filmed from the side);
+/// none in image pixels.
+pub fn checklist_mdc(item: &str, unit: &str) -> Option<f64> {
+    larger_of(["left", "right"].map(|s| format!("\"checklist {item} {s} ({unit})\",")))
+}
+
+/// The larger MDC95 of the rows starting with `rows`.
+fn larger_of(rows: [String; 2]) -> Option<f64> {
     MDC_CSV
         .lines()
         .filter(|line| rows.iter().any(|r| line.starts_with(r.as_str())))

@@ -128,28 +128,43 @@ pub struct Change {
     pub call: String,
 }
 
-/// The smallest difference ever called a change for `item` in `unit`, and where it comes from.
-/// Step and stance times: their MDC95 on the bundled sample (gait-eval's reliability table).
-/// Angles: 2 deg, the frontal angles' error under BlazePose-level jitter on projected motion
-/// capture (1-2.6 deg, BENCHMARKS.md) and the sample's hip peak MDC95 (2.0-3.2 deg). Lengths:
-/// 2 cm, the step width's accuracy target (0.025 leg lengths without a scale; 2.5 % of the leg
-/// for the heights and shifts measured in % of the leg: vaulting, whips).
+/// The smallest difference ever called a change for `item` in `unit`, and where it comes from:
+/// the larger of the item's video MDC95 and its unit's floor. The MDC95 is the robustness
+/// matrix's on the bundled sample (gait-eval's reliability table: re-encodings, resampling,
+/// rescaling, mirroring and keypoint noise of one walk), measured for the side-view items. The
+/// unit's floor: 2 deg for angles, the frontal angles' error under BlazePose-level jitter on
+/// projected motion capture (1-2.6 deg, BENCHMARKS.md) and the sample's hip peak MDC95 (2.0-3.2
+/// deg); 2 cm for lengths, the step width's accuracy target (0.025 leg lengths without a scale;
+/// 2.5 % of the leg for heights and shifts in % of the leg: vaulting, whips).
 pub fn floor(item: &str, unit: &str) -> (f64, &'static str) {
-    let mdc = match item {
-        "uneven_step_time" => gait_eval::reliability::mdc("step_time", "s"),
-        "uneven_stance_time" => gait_eval::reliability::mdc("stance", "%"),
-        _ => None,
-    };
-    if let Some(m) = mdc {
-        return (m, "MDC95 of re-encoding and keypoint noise");
-    }
-    match unit {
+    let own = match unit {
         "deg" => (2.0, "2 deg: the angles' error under pose-model jitter"),
         "cm" => (2.0, "2 cm: the step width's accuracy"),
         "leg" => (0.025, "0.025 leg lengths: the step width's accuracy"),
         "% leg" => (2.5, "2.5 % of the leg: the step width's accuracy"),
         _ => (0.0, ""),
+    };
+    let mdc = gait_eval::reliability::checklist_mdc(item, unit).or(match item {
+        "uneven_step_time" => gait_eval::reliability::mdc("step_time", "s"),
+        "uneven_stance_time" => gait_eval::reliability::mdc("stance", "%"),
+        _ => None,
+    });
+    match mdc {
+        Some(m) if m > own.0 => (m, "MDC95 of re-encoding and keypoint noise"),
+        _ => own,
     }
+}
+
+/// Why two visits' values of an item cannot be compared, if they cannot: lengths in image
+/// pixels change with the camera's distance and the video's size, and values in different
+/// units (one visit with a known height, one without) are different measures.
+fn incomparable(a: &Row, b: &Row) -> Option<String> {
+    if a.unit.starts_with("px") {
+        return Some(
+            "not judged: image pixels change with the camera's distance and the video's size (set kinematics.subject_height_m for centimetres)".into(),
+        );
+    }
+    (a.unit != b.unit).then(|| format!("not judged: {} against {}", a.unit, b.unit))
 }
 
 /// The changes between consecutive visits (in the order given) for every item and side both
@@ -168,7 +183,9 @@ pub fn changes(visits: &[VisitRecord]) -> Vec<Change> {
             let d = b.value - a.value;
             let se = (a.sd.powi(2) / a.n as f64 + b.sd.powi(2) / b.n as f64).sqrt();
             let limit = (1.96 * se).max(floor(&a.item, &a.unit).0);
-            let call = if !limit.is_finite() || a.n < 2 || b.n < 2 {
+            let call = if let Some(why) = incomparable(a, b) {
+                why
+            } else if !limit.is_finite() || a.n < 2 || b.n < 2 {
                 "not judged: a visit with fewer than 2 cycles has no spread".to_string()
             } else if d.abs() > limit {
                 "change".into()
@@ -233,7 +250,7 @@ pub fn write(out: &Path, visits: &[VisitRecord]) -> Result<Vec<Change>, VisitErr
     })?;
     let subject = visits.first().map_or("", |v| v.label.subject.as_str());
     let mut html = format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Progress: {subject}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:24px auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:13px}}td.change{{font-weight:bold}}</style></head><body><h1>Progress across visits: {subject}</h1><p>Each checklist measure visit by visit (mean ± SD over its cycles, n cycles). A difference between two visits is called a change when it exceeds 1.96 × √(SD₁²/n₁ + SD₂²/n₂), the spread the cycles of the two visits alone could make, and the measure's floor: the minimal detectable change of re-encoding and keypoint noise for step and stance times, 2 deg for angles (their error under pose-model jitter), 2 cm for lengths (2.5 % of the leg for heights in % of the leg); visits with one cycle are not judged.</p><table><tr><th>Item</th><th>Side</th>"
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Progress: {subject}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:24px auto}}table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 6px;font-size:13px}}td.change{{font-weight:bold}}</style></head><body><h1>Progress across visits: {subject}</h1><p>Each checklist measure visit by visit (mean ± SD over its cycles, n cycles). A difference between two visits is called a change when it exceeds 1.96 × √(SD₁²/n₁ + SD₂²/n₂), the spread the cycles of the two visits alone could make, and the measure's floor: the larger of its minimal detectable change under re-encoding and keypoint noise (measured for the side-view items) and 2 deg for angles (their error under pose-model jitter), 2 cm for lengths, 2.5 % of the leg for heights in % of the leg; visits with one cycle are not judged, nor are lengths in image pixels (they change with the camera's distance and the video's size) or values in different units.</p><table><tr><th>Item</th><th>Side</th>"
     );
     for v in visits {
         html.push_str(&format!("<th>{}</th>", v.name()));
@@ -389,6 +406,29 @@ mod tests {
         let c = changes(&[vaulting("1", -0.50), vaulting("2", -0.41)]);
         assert_eq!(c[0].call, "no change");
         let c = changes(&[vaulting("1", -0.50), vaulting("2", -3.5)]);
-        assert_eq!(c[0].call, "change");
+        let floor = floor("vaulting", "% leg").0;
+        let expected = if 3.0 > floor { "change" } else { "no change" };
+        assert_eq!(c[0].call, expected, "floor {floor}");
+    }
+
+    /// Step lengths in pixels of two visits (the same walk filmed at 1080p and at 720p, or from
+    /// another distance) differ by the camera, not the patient: not judged, nor are values in
+    /// different units.
+    #[test]
+    fn pixels_and_different_units_are_not_judged() {
+        let of = |session, value, unit: &str| {
+            let mut v = visit(session, value, 1.0, 4);
+            v.rows[0].item = "uneven_step_length".into();
+            v.rows[0].unit = unit.into();
+            v
+        };
+        let c = changes(&[of("1", 175.0, "px"), of("2", 126.0, "px")]);
+        assert!(
+            c[0].call.starts_with("not judged: image pixels"),
+            "{}",
+            c[0].call
+        );
+        let c = changes(&[of("1", 70.0, "cm"), of("2", 0.8, "leg")]);
+        assert_eq!(c[0].call, "not judged: cm against leg");
     }
 }
