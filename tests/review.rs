@@ -433,6 +433,14 @@ fn bad_input_is_one_line() {
         gait().arg("review").arg(work.path()),
         &["run.json", "gait run"],
     );
+    // A visit folder (a clinician's first try): its passes are the run folders to review.
+    let visit = work.path().join("visit");
+    copy_run(&visit.join("passes/1-left"));
+    std::fs::write(visit.join("visit.json"), "{}").unwrap();
+    fails_with(
+        gait().arg("review").arg(&visit),
+        &["a visit folder", "gait review", "passes/1-left"],
+    );
 }
 
 #[test]

@@ -113,6 +113,28 @@ fn named_video(manifest: &Value, dir: &Path) -> Option<PathBuf> {
     Some(found.unwrap_or(given))
 }
 
+/// What to do with a `gait visit` folder: review one of its passes (each a run folder).
+fn visit_passes(dir: &Path) -> String {
+    let mut passes: Vec<PathBuf> = std::fs::read_dir(dir.join("passes"))
+        .into_iter()
+        .flatten()
+        .filter_map(|e| Some(e.ok()?.path()))
+        .filter(|p| p.join("run.json").is_file())
+        .collect();
+    passes.sort();
+    let commands: Vec<String> = passes
+        .iter()
+        .map(|p| format!("`gait review {}`", p.display()))
+        .collect();
+    match commands.is_empty() {
+        true => "a visit folder without a finished pass: nothing to review".into(),
+        false => format!(
+            "a visit folder: review one of its passes, {} (the visit report names the pass and frame of each finding)",
+            commands.join(" or ")
+        ),
+    }
+}
+
 /// `dir` holds `inner` (both made absolute and free of `..`).
 fn inside(dir: &Path, inner: &Path) -> bool {
     match (dir.canonicalize(), inner.canonicalize()) {
@@ -134,6 +156,9 @@ impl ReviewSource {
         let manifest_path = dir.join("run.json");
         if !manifest_path.exists() && dir.join("kin.json").exists() {
             return Self::from_kin_dir(dir, video);
+        }
+        if !manifest_path.exists() && dir.join("visit.json").exists() {
+            return Err(ReviewError::run(dir, visit_passes(dir)));
         }
         let manifest = read_json(&manifest_path)?;
         let config = PipelineConfig::load(Some(&manifest_path), &[])?;
