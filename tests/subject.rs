@@ -189,3 +189,91 @@ fn the_detector_on_every_second_frame_follows_the_same_walker() {
         );
     }
 }
+
+/// A patient asked to walk to the end of the room and back: the sample, then its mirror (she
+/// leaves at the image's left, is out of view for 3 s, and walks back to the right with her
+/// right side to the camera). Both walks are followed and analysed, each side's events from
+/// both, and run.json says which track was taken as her walk back; the man on the box, there
+/// all along, is not.
+#[test]
+fn a_walk_there_and_back_is_followed_both_ways() {
+    let dir = tempfile::tempdir().unwrap();
+    let mirror = dir.path().join("mirror.mp4");
+    let both = dir.path().join("there_and_back.mp4");
+    let ffmpeg = |args: &[&std::ffi::OsStr]| {
+        let st = std::process::Command::new("ffmpeg")
+            .args(["-loglevel", "error", "-y"])
+            .args(args)
+            .status()
+            .expect("ffmpeg runs");
+        assert!(st.success());
+    };
+    let sample = sample_video();
+    ffmpeg(&[
+        "-i".as_ref(),
+        sample.as_os_str(),
+        "-vf".as_ref(),
+        "hflip".as_ref(),
+        "-c:v".as_ref(),
+        "libx264".as_ref(),
+        "-crf".as_ref(),
+        "16".as_ref(),
+        mirror.as_os_str(),
+    ]);
+    ffmpeg(&[
+        "-i".as_ref(),
+        sample.as_os_str(),
+        "-i".as_ref(),
+        mirror.as_os_str(),
+        "-filter_complex".as_ref(),
+        "[0:v][1:v]concat=n=2:v=1[v]".as_ref(),
+        "-map".as_ref(),
+        "[v]".as_ref(),
+        "-c:v".as_ref(),
+        "libx264".as_ref(),
+        "-crf".as_ref(),
+        "16".as_ref(),
+        both.as_os_str(),
+    ]);
+    let out = dir.path().join("run");
+    run_ok(run_on(&both, &out).args([
+        "--set",
+        "report.overlay=false",
+        "--set",
+        "report.pdf=false",
+    ]));
+    let bouts = csv_rows(&out.join("bouts.csv"));
+    let directions: Vec<&str> = bouts.iter().map(|b| b["direction"].as_str()).collect();
+    assert_eq!(directions, ["left", "right"], "{bouts:?}");
+    let ev = events(&out.join("events.csv"));
+    for (side, first_half) in [
+        ("left", true),
+        ("left", false),
+        ("right", true),
+        ("right", false),
+    ] {
+        let n = ev
+            .iter()
+            .filter(|e| e.0 == side && e.1 == "heel_strike" && (e.2 < 230) == first_half)
+            .count();
+        assert!(
+            n >= 2,
+            "{side} heel strikes in the {} walk: {ev:?}",
+            if first_half { "first" } else { "second" }
+        );
+    }
+    let manifest = read_json(&out.join("run.json"));
+    let back = manifest["subject"]["returns"].as_array().unwrap();
+    assert_eq!(back.len(), 1, "{back:?}");
+    let (first, last) = (
+        back[0]["first_frame"].as_u64().unwrap(),
+        back[0]["last_frame"].as_u64().unwrap(),
+    );
+    assert!(
+        first < 100 && last < 230,
+        "the other walk is the first one: {first}-{last}"
+    );
+    let cycles = csv_rows(&out.join("cycle_quality.csv"));
+    let accepted = cycles.iter().filter(|c| c["accepted"] == "true").count();
+    assert!(accepted >= 8, "{accepted} cycles accepted over both walks");
+}

@@ -8,6 +8,7 @@ pub mod appearance;
 mod bridge;
 mod choose;
 pub mod link;
+mod returns;
 pub mod sparse;
 mod stitch;
 pub mod walking;
@@ -54,6 +55,10 @@ pub struct SubjectConfig {
     /// but moves 4 of its 14 events by a frame: the pose model's choice to
     /// crop afresh from the box tips on the box's size (BENCHMARKS.md).
     pub detect_every: usize,
+    /// With `person = "walker"`: other walks across the view by a person of
+    /// the subject's colours and size, wholly before or after the subject's
+    /// (the walk back after a turn out of view), are followed too.
+    pub returns: bool,
 }
 
 impl Default for SubjectConfig {
@@ -66,6 +71,7 @@ impl Default for SubjectConfig {
             max_size_ratio: 1.4,
             max_colour_distance: 0.1,
             detect_every: 1,
+            returns: true,
         }
     }
 }
@@ -215,6 +221,21 @@ pub struct Subject {
     /// (`detect_every`) instead of detected; the pass that found the
     /// people sets it.
     pub interpolated_frames: usize,
+    /// Other tracks followed as the subject walking across the view again
+    /// (`[subject] returns`).
+    pub returns: Vec<Return>,
+}
+
+/// A track taken as the subject walking across the view again, and how it matched.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Return {
+    pub track: usize,
+    pub first_frame: usize,
+    pub last_frame: usize,
+    /// Mean colour difference from the subject's track (RGB in [0, 1]).
+    pub colour_distance: f32,
+    /// Ratio of the mean body sizes (at least 1).
+    pub size_ratio: f32,
 }
 
 /// Links the people of `frames` (frame index, people in it; in frame order)
@@ -255,7 +276,33 @@ pub fn find(
             frames.last().map_or(0, |f| f.0),
         ),
     };
-    let boxes = bridge::boxes(&tracks, chosen, &reach, config.max_colour_distance);
+    let mut boxes = bridge::boxes(&tracks, chosen, &reach, config.max_colour_distance);
+    let walker = choice == PersonChoice::Rule(gait_core::PersonRule::Walker);
+    let mut back = Vec::new();
+    if config.returns && walker && walking {
+        for (track, colour_distance, size_ratio) in returns::returns(&tracks, chosen, config) {
+            for (f, b) in bridge::boxes(&tracks, track, &reach, config.max_colour_distance) {
+                boxes.entry(f).or_insert(b);
+            }
+            back.push(Return {
+                track,
+                first_frame: tracks[track].first_frame,
+                last_frame: tracks[track].last_frame,
+                colour_distance,
+                size_ratio,
+            });
+        }
+    }
+    let reason = match back.len() {
+        0 => reason,
+        n => format!(
+            "{reason}; and {n} more walk(s) across the view in the subject's colours and size ({})",
+            back.iter()
+                .map(|r| format!("frames {}-{}", r.first_frame, r.last_frame))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
     Ok(Subject {
         last_frame: frames.last().map_or(0, |f| f.0),
         in_view: ranges(boxes.keys().copied()),
@@ -265,6 +312,7 @@ pub fn find(
         walking,
         boxes,
         interpolated_frames: 0,
+        returns: back,
     })
 }
 
