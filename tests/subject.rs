@@ -193,8 +193,8 @@ fn the_detector_on_every_second_frame_follows_the_same_walker() {
 /// A patient asked to walk to the end of the room and back: the sample, then its mirror (she
 /// leaves at the image's left, is out of view for 3 s, and walks back to the right with her
 /// right side to the camera). Both walks are followed and analysed, each side's events from
-/// both, and run.json says which track was taken as her walk back; the man on the box, there
-/// all along, is not.
+/// both and its cycles from the walk where it is near the camera, and run.json says which track
+/// was taken as her walk back; the man on the box, there all along, is not.
 #[test]
 fn a_walk_there_and_back_is_followed_both_ways() {
     let dir = tempfile::tempdir().unwrap();
@@ -273,7 +273,21 @@ fn a_walk_there_and_back_is_followed_both_ways() {
         first < 100 && last < 230,
         "the other walk is the first one: {first}-{last}"
     );
+    // Each leg's curves come from the walk where it is near the camera: the left's from the
+    // first walk (toward the image's left), the right's from the walk back; the far leg's
+    // strides are rejected as such.
     let cycles = csv_rows(&out.join("cycle_quality.csv"));
+    for c in &cycles {
+        let first: usize = c["first_frame"].parse().unwrap();
+        let near = (c["side"] == "left") == (first < 230);
+        let verdict = (c["accepted"].as_str(), c["reasons"].as_str());
+        let want = if near {
+            ("true", "")
+        } else {
+            ("false", "far_side")
+        };
+        assert_eq!(verdict, want, "{c:?}");
+    }
     let accepted = cycles.iter().filter(|c| c["accepted"] == "true").count();
-    assert!(accepted >= 8, "{accepted} cycles accepted over both walks");
+    assert!(accepted >= 4, "{accepted} cycles accepted over both walks");
 }

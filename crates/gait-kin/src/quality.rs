@@ -36,9 +36,12 @@ pub enum Reason {
     Excluded,
     /// The leg shorter than `cycle_min_leg_px`: the walker too small in the image.
     SmallSubject,
+    /// The leg far from the camera in its bout (a side view), while the same leg has accepted
+    /// strides near the camera in a bout the other way (a walk there and back).
+    FarSide,
 }
 
-pub const REASONS: [Reason; 8] = [
+pub const REASONS: [Reason; 9] = [
     Reason::StrideTime,
     Reason::FilledGap,
     Reason::LowLikelihood,
@@ -47,6 +50,7 @@ pub const REASONS: [Reason; 8] = [
     Reason::CrossesBout,
     Reason::Excluded,
     Reason::SmallSubject,
+    Reason::FarSide,
 ];
 
 impl Reason {
@@ -60,6 +64,7 @@ impl Reason {
             Reason::CrossesBout => "crosses_bout",
             Reason::Excluded => "excluded",
             Reason::SmallSubject => "small_subject",
+            Reason::FarSide => "far_side",
         }
     }
 
@@ -88,6 +93,7 @@ impl Reason {
                 "legs shorter than {} px (hip to ankle): the walker is too small in the image; film closer or at a higher resolution",
                 kin.cycle_min_leg_px
             ),
+            Reason::FarSide => "the leg far from the camera (half hidden) in this walk; the same leg's strides near the camera in the walk the other way are used".into(),
         }
     }
 }
@@ -259,7 +265,7 @@ pub fn assess(ev: &Evidence, strides: &[Stride], kin: &KinematicsConfig) -> Vec<
             segments(t, ev.size, &Side::BOTH, a..=(b.last - f0).min(n - 1))
         })
         .collect();
-    strides
+    let mut out: Vec<CycleQuality> = strides
         .iter()
         .map(|s| {
             let bout = same_bout(ev.bouts, s);
@@ -273,7 +279,41 @@ pub fn assess(ev: &Evidence, strides: &[Stride], kin: &KinematicsConfig) -> Vec<
             q.accepted = q.reasons.is_empty();
             q
         })
-        .collect()
+        .collect();
+    reject_far_sides(&mut out, ev);
+    out
+}
+
+/// Side views: a leg's strides far from the camera are rejected where the same leg has
+/// accepted strides near it, in a bout walked the other way. From a side view the far leg is
+/// half hidden behind the near one: on the bundled sample walked there and back its mean
+/// curves differ from the near walk's by 4.5-8.7 deg RMS, and pooled they would move the near
+/// curves by 2.7-5.2. A walk one way only keeps every stride (the far leg's are all it has).
+fn reject_far_sides(strides: &mut [CycleQuality], ev: &Evidence) {
+    if ev.size.is_some() {
+        return;
+    }
+    let near = |q: &CycleQuality| {
+        q.bout
+            .and_then(|b| ev.bouts.get(b))
+            .and_then(|b| b.direction.near_side())
+            .map(|s| s == q.side)
+    };
+    for side in Side::BOTH {
+        let has_near = strides
+            .iter()
+            .any(|q| q.side == side && q.accepted && near(q) == Some(true));
+        if !has_near {
+            continue;
+        }
+        for q in strides
+            .iter_mut()
+            .filter(|q| q.side == side && near(q) == Some(false))
+        {
+            q.reasons.push(Reason::FarSide);
+            q.accepted = false;
+        }
+    }
 }
 
 /// The numbers of one stride (bout, reasons and verdict left for the caller).

@@ -195,6 +195,46 @@ fn a_stride_across_two_bouts_is_rejected() {
     assert!(!step_ok(&q, &c.bouts, true, 170, 185));
 }
 
+/// A walk there and back: the first bout to the image right (the right leg near the camera),
+/// the second to the left. The left leg's strides of the first bout are far from the camera
+/// and the same leg has strides near it in the second: those far ones are rejected, named; the
+/// right leg keeps only its first-bout strides the same way. One bout alone keeps everything.
+#[test]
+fn far_leg_strides_give_way_to_the_same_leg_near_the_camera() {
+    let mut c = Case::new();
+    let back = Bout {
+        direction: Direction::Left,
+        ..bout(90, 179)
+    };
+    c.bouts = vec![bout(0, 89), back];
+    let strides: Vec<Stride> = [
+        (Side::Left, 10),
+        (Side::Right, 27),
+        (Side::Left, 100),
+        (Side::Right, 117),
+    ]
+    .into_iter()
+    .map(|(side, start)| Stride::on_frames(side, start, start + 34))
+    .collect();
+    let q = c.judge(&strides, &KinematicsConfig::default());
+    let got: Vec<(Side, bool, Vec<Reason>)> = q
+        .iter()
+        .map(|q| (q.side, q.accepted, q.reasons.clone()))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            (Side::Left, false, vec![Reason::FarSide]),
+            (Side::Right, true, vec![]),
+            (Side::Left, true, vec![]),
+            (Side::Right, false, vec![Reason::FarSide]),
+        ]
+    );
+    c.bouts = vec![bout(0, 179)];
+    let q = c.judge(&strides, &KinematicsConfig::default());
+    assert!(q.iter().all(|q| q.accepted), "one walk keeps every stride");
+}
+
 #[test]
 fn strides_over_excluded_frames_are_rejected() {
     let mut c = Case::new();
