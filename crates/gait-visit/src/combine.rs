@@ -18,8 +18,8 @@ pub struct Source {
 
 const SIDES: [&str; 2] = ["left", "right"];
 
-/// Each side's sagittal curves: from its own side view (the limb near the camera), else from
-/// the other side view (the far limb, half hidden), said so.
+/// Each side's sagittal curves: from a side view where that limb was near the camera (its own
+/// side's view, or a walk there and back), else from one where it was far (half hidden), said so.
 pub fn sagittal(passes: &[Pass], sources: &mut Vec<Source>) -> Vec<CycleCurve> {
     let mut out = Vec::new();
     for side in SIDES {
@@ -27,13 +27,13 @@ pub fn sagittal(passes: &[Pass], sources: &mut Vec<Source>) -> Vec<CycleCurve> {
             passes
                 .iter()
                 .filter(|p| {
-                    !p.is_frontal() && (p.view == side) == near && p.cycles(side, false) > 0
+                    !p.is_frontal() && p.near_camera(side) == near && p.cycles(side, false) > 0
                 })
                 .max_by_key(|p| p.cycles(side, false))
         };
         let (pass, how) = match (best(true), best(false)) {
             (Some(p), _) => (p, "near the camera"),
-            (None, Some(p)) => (p, "far from the camera: no pass from its own side"),
+            (None, Some(p)) => (p, "far from the camera: no pass shows it near"),
             (None, None) => {
                 sources.push(Source {
                     what: format!("{side} sagittal curves"),
@@ -220,7 +220,7 @@ pub fn checklist(
                 .max_by_key(|(p, v)| {
                     (
                         v.status != Status::NotAssessable,
-                        v.item.view == "side" && p.view == side.name(),
+                        v.item.view == "side" && p.near_camera(side.name()),
                         p.cycles(side.name(), v.item.view != "side"),
                     )
                 })
@@ -252,7 +252,7 @@ fn both_sides_rank(
         .count();
     let frontal = mine.clone().any(|v| v.item.view != "side");
     let fewer = p.cycles("left", frontal).min(p.cycles("right", frontal));
-    (judged == 2, p.view == preferred.name(), fewer)
+    (judged == 2, p.near_camera(preferred.name()), fewer)
 }
 
 #[cfg(test)]
@@ -292,6 +292,7 @@ mod tests {
             status: "done".into(),
             fps: Some(30.0),
             warnings: Vec::new(),
+            near: Vec::new(),
         }
     }
 

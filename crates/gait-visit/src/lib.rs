@@ -204,6 +204,7 @@ mod tests {
             status: "done".into(),
             fps: Some(fps),
             warnings: warnings.iter().map(|w| w.to_string()).collect(),
+            near: Vec::new(),
         }
     }
 

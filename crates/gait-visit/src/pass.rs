@@ -28,6 +28,9 @@ pub struct Pass {
     pub fps: Option<f64>,
     /// run.json's warnings (a resampled frame rate, an HDR conversion, bridged keypoints).
     pub warnings: Vec<String>,
+    /// The sides with an accepted cycle near the camera (a side view's walk toward the image's
+    /// left shows the left side; a walk there and back shows both).
+    pub near: Vec<String>,
 }
 
 impl Pass {
@@ -75,11 +78,22 @@ impl Pass {
             status,
             fps: manifest["input"]["fps"].as_f64(),
             warnings,
+            near: near_sides(dir),
         })
     }
 
     pub fn is_frontal(&self) -> bool {
         self.view == "anterior" || self.view == "posterior"
+    }
+
+    /// Whether `side`'s curves in this pass come from cycles near the camera: by the walk's
+    /// direction in its bouts where the run says, else by the view it was given as.
+    pub fn near_camera(&self, side: &str) -> bool {
+        if self.near.is_empty() {
+            self.view == side
+        } else {
+            self.near.iter().any(|s| s == side)
+        }
     }
 
     /// A short name: `left view (L.mp4)`.
@@ -104,5 +118,69 @@ impl Pass {
             .map(|c| c.n_cycles)
             .max()
             .unwrap_or(0)
+    }
+}
+
+/// The sides with an accepted cycle in a bout walked toward that side of the image (the side
+/// facing the camera), from bouts.csv and cycle_quality.csv; empty where they are missing (a
+/// front or back view's bouts go toward or away from the camera).
+fn near_sides(dir: &Path) -> Vec<String> {
+    let rows = |name: &str| -> Vec<csv::StringRecord> {
+        csv::Reader::from_path(dir.join(name))
+            .map(|mut r| r.records().filter_map(Result::ok).collect())
+            .unwrap_or_default()
+    };
+    let directions: Vec<String> = rows("bouts.csv")
+        .iter()
+        .filter_map(|r| r.get(3).map(str::to_string))
+        .collect();
+    let header = csv::Reader::from_path(dir.join("cycle_quality.csv"))
+        .and_then(|mut r| r.headers().cloned())
+        .unwrap_or_default();
+    let col = |name: &str| header.iter().position(|h| h == name);
+    let (Some(side), Some(accepted), Some(bout)) = (col("side"), col("accepted"), col("bout"))
+    else {
+        return Vec::new();
+    };
+    let mut out: Vec<String> = rows("cycle_quality.csv")
+        .iter()
+        .filter(|r| r.get(accepted) == Some("true"))
+        .filter_map(|r| {
+            let b: usize = r.get(bout)?.parse().ok()?;
+            let s = r.get(side)?;
+            (directions.get(b)?.as_str() == s).then(|| s.to_string())
+        })
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A side view walked there and back shows both sides near the camera, each in the bout
+    /// walked toward its side of the image; a rejected cycle counts for nothing.
+    #[test]
+    fn the_near_sides_are_read_from_the_bouts_directions() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
+        write(
+            "bouts.csv",
+            "bout,first,last,direction,mean_speed\n0,53,185,left,1.6\n1,283,415,right,1.6\n",
+        );
+        write(
+            "cycle_quality.csv",
+            "side,first_frame,last_frame,accepted,reasons,bout\nleft,79,117,true,,0\nright,61,98,false,far_side,0\nright,309,347,true,,1\n",
+        );
+        assert_eq!(near_sides(dir.path()), ["left", "right"]);
+        write(
+            "cycle_quality.csv",
+            "side,first_frame,last_frame,accepted,reasons,bout\nleft,79,117,true,,0\nright,61,98,true,,0\n",
+        );
+        assert_eq!(near_sides(dir.path()), ["left"]);
+        std::fs::remove_file(dir.path().join("bouts.csv")).unwrap();
+        assert!(near_sides(dir.path()).is_empty());
     }
 }
