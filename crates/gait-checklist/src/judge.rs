@@ -70,11 +70,7 @@ pub fn judge_over_other(
     unit: &str,
     none: &str,
 ) -> Verdict {
-    let values: Vec<f64> = other
-        .iter()
-        .map(|s| s.value)
-        .filter(|v| v.is_finite())
-        .collect();
+    let values = finite(other);
     if values.is_empty() {
         return Verdict::not_assessable(item, side, none);
     }
@@ -94,6 +90,15 @@ pub fn judge_over_other(
     judged(item, side, &less, base_var, t, (unit, none))
 }
 
+/// The samples' values that are numbers.
+fn finite(samples: &[Sample]) -> Vec<f64> {
+    samples
+        .iter()
+        .map(|s| s.value)
+        .filter(|v| v.is_finite())
+        .collect()
+}
+
 /// [`judge`] with `base_var`, the variance of a baseline subtracted from every sample.
 fn judged(
     item: Item,
@@ -103,11 +108,7 @@ fn judged(
     t: Threshold,
     (unit, none): (&str, &str),
 ) -> Verdict {
-    let values: Vec<f64> = samples
-        .iter()
-        .map(|s| s.value)
-        .filter(|v| v.is_finite())
-        .collect();
+    let values = finite(samples);
     if values.is_empty() || !t.value.is_finite() {
         return Verdict::not_assessable(item, side, none);
     }

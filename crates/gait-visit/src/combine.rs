@@ -296,6 +296,13 @@ mod tests {
         }
     }
 
+    /// (side, status, source) of each verdict.
+    fn verdicts(got: &[(Verdict, String)]) -> Vec<(Side, Status, &str)> {
+        got.iter()
+            .map(|(v, from)| (v.side, v.status, from.as_str()))
+            .collect()
+    }
+
     /// A pass's step-length verdicts: `present` names the side that pass finds longer.
     fn step_length(present: Side, value: f64) -> Vec<Verdict> {
         Side::BOTH
@@ -323,10 +330,7 @@ mod tests {
             (&right, step_length(Side::Left, 2.0)),
         ];
         let got = checklist(&per_pass, (&[], ""), Side::Right);
-        let status: Vec<_> = got
-            .iter()
-            .map(|(v, from)| (v.side, v.status, from.as_str()))
-            .collect();
+        let status = verdicts(&got);
         assert_eq!(
             status,
             [
@@ -373,10 +377,7 @@ mod tests {
             (&right, vec![step_time(Side::Left), step_time(Side::Right)]),
         ];
         let got = checklist(&per_pass, (&pooled, "pooled"), Side::Left);
-        let status: Vec<_> = got
-            .iter()
-            .map(|(v, from)| (v.side, v.status, from.as_str()))
-            .collect();
+        let status = verdicts(&got);
         assert_eq!(
             status,
             [
