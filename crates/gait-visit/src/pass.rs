@@ -2,6 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
+use gait_checklist::Side;
 use gait_eval::plot::{CycleCurve, read_curves_csv, read_cycles_csv};
 use gait_report::spatiotemporal::{StParam, read_spatiotemporal};
 
@@ -122,38 +123,21 @@ impl Pass {
 }
 
 /// The sides with an accepted cycle in a bout walked toward that side of the image (the side
-/// facing the camera), from bouts.csv and cycle_quality.csv; empty where they are missing (a
-/// front or back view's bouts go toward or away from the camera).
+/// facing the camera), read as the checklist reads the folder; empty where the folder says
+/// nothing of it (a front or back view's bouts go toward or away from the camera).
 fn near_sides(dir: &Path) -> Vec<String> {
-    let rows = |name: &str| -> Vec<csv::StringRecord> {
-        csv::Reader::from_path(dir.join(name))
-            .map(|mut r| r.records().filter_map(Result::ok).collect())
-            .unwrap_or_default()
-    };
-    let directions: Vec<String> = rows("bouts.csv")
-        .iter()
-        .filter_map(|r| r.get(3).map(str::to_string))
-        .collect();
-    let header = csv::Reader::from_path(dir.join("cycle_quality.csv"))
-        .and_then(|mut r| r.headers().cloned())
-        .unwrap_or_default();
-    let col = |name: &str| header.iter().position(|h| h == name);
-    let (Some(side), Some(accepted), Some(bout)) = (col("side"), col("accepted"), col("bout"))
-    else {
+    let Ok(run) = gait_checklist::RunFiles::read(dir) else {
         return Vec::new();
     };
-    let mut out: Vec<String> = rows("cycle_quality.csv")
-        .iter()
-        .filter(|r| r.get(accepted) == Some("true"))
-        .filter_map(|r| {
-            let b: usize = r.get(bout)?.parse().ok()?;
-            let s = r.get(side)?;
-            (directions.get(b)?.as_str() == s).then(|| s.to_string())
+    Side::BOTH
+        .into_iter()
+        .filter(|&side| {
+            let toward = if side == Side::Right { 1.0 } else { -1.0 };
+            run.strides_of(side)
+                .any(|s| run.direction(s.first) == Some(toward))
         })
-        .collect();
-    out.sort();
-    out.dedup();
-    out
+        .map(|side| side.name().to_string())
+        .collect()
 }
 
 #[cfg(test)]

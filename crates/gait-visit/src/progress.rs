@@ -144,12 +144,7 @@ pub fn floor(item: &str, unit: &str) -> (f64, &'static str) {
         "% leg" => (2.5, "2.5 % of the leg: the step width's accuracy"),
         _ => (0.0, ""),
     };
-    let mdc = gait_eval::reliability::checklist_mdc(item, unit).or(match item {
-        "uneven_step_time" => gait_eval::reliability::mdc("step_time", "s"),
-        "uneven_stance_time" => gait_eval::reliability::mdc("stance", "%"),
-        _ => None,
-    });
-    match mdc {
+    match gait_eval::reliability::checklist_mdc(item, unit) {
         Some(m) if m > own.0 => (m, "MDC95 of re-encoding and keypoint noise"),
         _ => own,
     }
