@@ -1,6 +1,7 @@
 //! Edge detectors implementing [`gait_core::EdgeDetector`], chosen in the
 //! `[edge]` table of a pipeline config by `kind`.
 
+mod blur;
 mod canny;
 mod canny_detector;
 mod hed;
@@ -17,6 +18,7 @@ use std::path::PathBuf;
 use gait_core::{EdgeDetector, StageContext, StageError};
 use serde::{Deserialize, Serialize};
 
+pub use blur::{Region, blur_px};
 pub use canny::{Canny, CannyParams, edge_f1};
 pub use canny_detector::{CannyConfig, CannyDetector};
 pub use hed::{CandleHedNet, HedConfig, HedDetector, HedError, HedNetwork, OrtHedNet};

@@ -230,6 +230,16 @@ pub struct KinematicsConfig {
     /// (the sample at 480p, legs of 92 px, tipped events and cycles; at 720p, 137 px, its
     /// events held). 0 turns the check off.
     pub cycle_min_leg_px: f64,
+    /// A stride whose legs' image blur (px, the median of the frames measured in it) exceeds
+    /// this share of its leg length is rejected (`blurred`): the walker is too blurred for the
+    /// pose model (the sample at 0.8 % sharp, 1.3 % blurred by sigma 2 px, 1.8 % by sigma 4, 2.6 %
+    /// by sigma 8 with curves 9-14 deg RMS off). 0.015 lets a walker of `cycle_min_leg_px` be
+    /// as soft as a sharp frame reads (1.5 px). 0 turns the check off.
+    pub cycle_max_blur_share: f64,
+    /// The blur of the legs measured per frame (px; `gait run` fills it, `gait kin` reads it
+    /// from run.json beside the keypoints). Not a setting: `None` leaves strides unjudged by it.
+    #[serde(skip)]
+    pub image_blur_px: Option<std::collections::BTreeMap<usize, f64>>,
     /// corrections.toml written by a person, a script or `gait review`: swaps, events, excluded
     /// frames, keypoints (format: `gait_kin::corrections`). Read and checked by the analysis.
     pub corrections: Option<PathBuf>,
@@ -262,6 +272,8 @@ impl Default for KinematicsConfig {
             cycle_segment_tolerance: 0.2,
             cycle_max_swapped_share: 0.1,
             cycle_min_leg_px: 100.0,
+            cycle_max_blur_share: 0.015,
+            image_blur_px: None,
             corrections: None,
             view: crate::view::ViewSetting::Auto,
         }
@@ -348,6 +360,12 @@ impl KinematicsConfig {
             return bad(
                 "cycle_min_leg_px",
                 "must be a non-negative number of pixels",
+            );
+        }
+        if !(self.cycle_max_blur_share.is_finite() && self.cycle_max_blur_share >= 0.0) {
+            return bad(
+                "cycle_max_blur_share",
+                "must be a non-negative share of the leg length (0 turns it off)",
             );
         }
         Ok(())

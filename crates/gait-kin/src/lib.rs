@@ -302,6 +302,7 @@ fn run_chain(
     };
     quality::warn_small_subject(t, kin, &mut warnings);
     let cycle_quality = quality::assess(&evidence, &strides, kin);
+    quality::warn_blurred(&cycle_quality, kin, &mut warnings);
     warnings.extend(quality::warnings(&cycle_quality, kin));
     let (cycles_accepted, cycles_rejected) = quality::counts(&cycle_quality);
     let accepted = quality::accepted(&cycle_quality);

@@ -75,6 +75,7 @@ pub fn cycles(q: &[CycleQuality], kin: &KinematicsConfig) -> Vec<CycleMargin> {
                     c.unsure_frames as f64 / (kin.cycle_max_swapped_share * frames),
                 ),
                 ("small_subject", kin.cycle_min_leg_px / c.leg_px),
+                ("blurred", c.blur_px / (kin.cycle_max_blur_share * c.leg_px)),
             ];
             checks
                 .into_iter()
@@ -122,6 +123,7 @@ mod tests {
             leg_px: 190.0,
             swapped_frames: 0,
             unsure_frames: 0,
+            blur_px: f64::NAN,
             bout: Some(0),
             at: None,
         };

@@ -39,9 +39,11 @@ pub enum Reason {
     /// The leg far from the camera in its bout (a side view), while the same leg has accepted
     /// strides near the camera in a bout the other way (a walk there and back).
     FarSide,
+    /// The legs' image blur over `cycle_max_blur_share` of the leg: the walker too blurred.
+    Blurred,
 }
 
-pub const REASONS: [Reason; 9] = [
+pub const REASONS: [Reason; 10] = [
     Reason::StrideTime,
     Reason::FilledGap,
     Reason::LowLikelihood,
@@ -51,6 +53,7 @@ pub const REASONS: [Reason; 9] = [
     Reason::Excluded,
     Reason::SmallSubject,
     Reason::FarSide,
+    Reason::Blurred,
 ];
 
 impl Reason {
@@ -65,6 +68,7 @@ impl Reason {
             Reason::Excluded => "excluded",
             Reason::SmallSubject => "small_subject",
             Reason::FarSide => "far_side",
+            Reason::Blurred => "blurred",
         }
     }
 
@@ -92,6 +96,10 @@ impl Reason {
             Reason::SmallSubject => format!(
                 "legs shorter than {} px (hip to ankle): the walker is too small in the image; film closer or at a higher resolution",
                 kin.cycle_min_leg_px
+            ),
+            Reason::Blurred => format!(
+                "the legs' image blurred over {:.1} % of the leg length: too blurred for reliable keypoints; film in focus, in more light or with a shorter exposure",
+                100.0 * kin.cycle_max_blur_share
             ),
             Reason::FarSide => "the leg far from the camera (half hidden) in this walk; the same leg's strides near the camera in the walk the other way are used".into(),
         }
@@ -121,6 +129,9 @@ pub struct CycleQuality {
     pub shank_ratio: f64,
     /// Median thigh + median shank length of the stride's leg, pixels.
     pub leg_px: f64,
+    /// Median blur of the legs' image over the frames measured in the stride (px; NaN when
+    /// none was measured), judged against `cycle_max_blur_share` of `leg_px`.
+    pub blur_px: f64,
     /// Frames inside the stride whose leg labels the swap correction exchanged.
     pub swapped_frames: usize,
     /// Frames inside the stride whose leg labels are in doubt (judged by
@@ -271,6 +282,7 @@ pub fn assess(ev: &Evidence, strides: &[Stride], kin: &KinematicsConfig) -> Vec<
             let bout = same_bout(ev.bouts, s);
             let reference = bout.map_or(whole, |b| per_bout[b]);
             let mut q = measure(ev, s, reference, med);
+            q.blur_px = stride_blur(kin, s);
             q.bout = bout;
             q.reasons = verdict(&q, kin, ev.enforce_bouts);
             if excluded(ev, s) {
@@ -316,6 +328,15 @@ fn reject_far_sides(strides: &mut [CycleQuality], ev: &Evidence) {
     }
 }
 
+/// The median of the legs' blur measured in the frames of stride `s` (NaN: none measured).
+fn stride_blur(kin: &KinematicsConfig, s: &Stride) -> f64 {
+    let Some(blur) = &kin.image_blur_px else {
+        return f64::NAN;
+    };
+    let mut v: Vec<f64> = blur.range(s.start..=s.end).map(|(_, b)| *b).collect();
+    median(&mut v)
+}
+
 /// The numbers of one stride (bout, reasons and verdict left for the caller).
 fn measure(ev: &Evidence, s: &Stride, reference: [f64; 2], median_s: f64) -> CycleQuality {
     let t = ev.clean;
@@ -346,6 +367,7 @@ fn measure(ev: &Evidence, s: &Stride, reference: [f64; 2], median_s: f64) -> Cyc
         thigh_ratio: own[0] / reference[0],
         shank_ratio: own[1] / reference[1],
         leg_px: px[0] + px[1],
+        blur_px: f64::NAN,
         swapped_frames: ev.swapped[a..=b].iter().filter(|&&x| x).count(),
         unsure_frames: ev.unsure[a..=b].iter().filter(|&&x| x).count(),
         bout: None,
@@ -385,6 +407,10 @@ fn verdict(q: &CycleQuality, kin: &KinematicsConfig, enforce_bouts: bool) -> Vec
         ),
         (Reason::CrossesBout, enforce_bouts && q.bout.is_none()),
         (Reason::SmallSubject, q.leg_px < kin.cycle_min_leg_px),
+        (
+            Reason::Blurred,
+            kin.cycle_max_blur_share > 0.0 && q.blur_px > kin.cycle_max_blur_share * q.leg_px,
+        ),
     ]
     .into_iter()
     .filter_map(|(r, bad)| bad.then_some(r))
@@ -452,6 +478,30 @@ pub fn step_ok(
         .filter(|c| c.first_frame <= from && to <= c.last_frame)
         .peekable();
     around.peek().is_none() || around.any(|c| c.accepted)
+}
+
+/// A walker too blurred for the pose model: the measured blur, the leg and the strides' frames.
+pub(crate) fn warn_blurred(q: &[CycleQuality], kin: &KinematicsConfig, warnings: &mut Vec<String>) {
+    let blurred: Vec<&CycleQuality> = q
+        .iter()
+        .filter(|c| c.reasons.contains(&Reason::Blurred))
+        .collect();
+    let first = blurred.iter().map(|c| c.first_frame).min();
+    let last = blurred.iter().map(|c| c.last_frame).max();
+    let (Some(a), Some(b)) = (first, last) else {
+        return;
+    };
+    let mut blur: Vec<f64> = blurred.iter().map(|c| c.blur_px).collect();
+    let mut leg: Vec<f64> = blurred.iter().map(|c| c.leg_px).collect();
+    let (blur, leg) = (median(&mut blur), median(&mut leg));
+    warnings.push(format!(
+        "the subject's legs are blurred in the image: edges spread over {blur:.1} px (median over the strides of frames {}-{}), {:.1} % of the legs' {leg:.0} px, over kinematics.cycle_max_blur_share = {:.1} %: too blurred for reliable keypoints, so {} strides are rejected (blurred; cycle_quality.csv, blur_px); film in focus, in more light or with a shorter exposure",
+        a,
+        b,
+        100.0 * blur / leg,
+        100.0 * kin.cycle_max_blur_share,
+        blurred.len()
+    ));
 }
 
 /// A walker too small in the image for the pose model: the measured leg and the frames.

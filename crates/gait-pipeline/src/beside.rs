@@ -3,6 +3,7 @@
 //! need, the run's analysis settings). `gait kin` and `gait review --keypoints` read it, so a
 //! run's keypoints repeat its kinematics.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
@@ -17,6 +18,9 @@ pub struct RunBeside {
     pub fps: Option<f64>,
     /// Width and height of the frames, in pixels.
     pub frame_size: Option<[u32; 2]>,
+    /// The blur of the subject's legs per frame measured (`input.blur_px`), which the stride
+    /// checks judge (`kinematics.image_blur_px`).
+    pub blur_px: Option<BTreeMap<usize, f64>>,
 }
 
 impl RunBeside {
@@ -48,9 +52,22 @@ impl RunBeside {
                 .and_then(Value::as_f64)
                 .filter(|f| f.is_finite() && *f > 0.0),
             frame_size: size("width").zip(size("height")).map(|(w, h)| [w, h]),
+            blur_px: json.pointer("/input/blur_px").and_then(blur_table),
             manifest,
         }))
     }
+}
+
+/// `{"frame": px, ...}` as written by the run; entries that are not a frame number and a
+/// number are left out.
+fn blur_table(v: &Value) -> Option<BTreeMap<usize, f64>> {
+    let table = v.as_object()?;
+    Some(
+        table
+            .iter()
+            .filter_map(|(k, v)| Some((k.parse().ok()?, v.as_f64()?)))
+            .collect(),
+    )
 }
 
 #[cfg(test)]
@@ -65,12 +82,13 @@ mod tests {
         let manifest = dir.path().join("run.json");
         std::fs::write(
             &manifest,
-            r#"{"input": {"fps": 30.0, "width": 1768, "height": 994}}"#,
+            r#"{"input": {"fps": 30.0, "width": 1768, "height": 994, "blur_px": {"60": 1.5, "65": 1.75}}}"#,
         )
         .unwrap();
         let found = RunBeside::find(&kp).unwrap().unwrap();
         assert_eq!(found.fps, Some(30.0));
         assert_eq!(found.frame_size, Some([1768, 994]));
+        assert_eq!(found.blur_px, Some(BTreeMap::from([(60, 1.5), (65, 1.75)])));
         std::fs::write(&manifest, "{").unwrap();
         let e = RunBeside::find(&kp).unwrap_err().to_string();
         assert!(e.contains("run.json") && e.contains("not JSON"), "{e}");

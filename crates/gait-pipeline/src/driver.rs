@@ -87,6 +87,8 @@ pub(crate) struct Driver<'a> {
     /// The current batch and the one before: a stateful stage's state lost to
     /// a corrupt cache entry is rebuilt from these frames.
     pub(crate) recent: Vec<Frame>,
+    /// The blur of the subject's legs, measured on the frames estimated.
+    pub(crate) sharpness: &'a mut crate::sharpness::Sharpness,
 }
 
 impl Driver<'_> {
@@ -390,6 +392,9 @@ impl Driver<'_> {
             }
             if batch.len() == batch_size || ((is_last || stop.is_some()) && !batch.is_empty()) {
                 let poses = self.process(&batch)?;
+                if self.estimate {
+                    self.sharpness.measure(&batch, &poses);
+                }
                 out.extend(batch.iter().map(|f| f.index).zip(poses));
                 // The frames a stateful stage may have to see again (a corrupt saved state):
                 // the batch before (the current one is handed to it as well), moved, not copied.

@@ -30,6 +30,7 @@ mod redraw;
 pub mod registry;
 pub mod runner;
 pub mod selection;
+mod sharpness;
 pub mod still;
 mod subject;
 pub mod timings;

@@ -91,6 +91,10 @@ pub struct InputRecord {
     /// does ("6": 3 is three photographs taken upright on a phone held sideways).
     #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub exif_orientation: BTreeMap<u16, usize>,
+    /// The blur of the subject's legs (px, `gait_edge::blur_px`) in the frames measured,
+    /// about six a second (sharpness.rs); the kinematics judge strides by it.
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub blur_px: std::collections::BTreeMap<usize, f64>,
 }
 
 #[derive(Debug, Clone, Serialize)]

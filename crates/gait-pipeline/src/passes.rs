@@ -14,6 +14,7 @@ use crate::manifest::StageRecord;
 use crate::plan::{ORIGINAL_POSE, StageCaches};
 use crate::registry::Stages;
 use crate::selection::{self, SelectionMode, SelectionRecord};
+use crate::sharpness::Sharpness;
 use crate::{PipelineConfig, PipelineError};
 
 /// What the passes found.
@@ -28,6 +29,8 @@ pub(crate) struct PassOutput {
     pub(crate) original: Option<Vec<(usize, Pose)>>,
     /// Why frames were judged poor (poor mode).
     pub(crate) selection: SelectionRecord,
+    /// The blur of the subject's legs (px) in the frames measured.
+    pub(crate) blur_px: BTreeMap<usize, f64>,
 }
 
 /// Which frames a pass hands on: `regenerate` = through edges and regenerator
@@ -68,25 +71,30 @@ pub(crate) struct Passes<'a> {
     pub(crate) range_end: Option<usize>,
     /// Makes a progress bar for a pass named by its argument.
     pub(crate) bar: &'a dyn Fn(&str) -> Progress,
+    /// Measures the blur of the subject's legs as the frames go by.
+    pub(crate) sharpness: Sharpness,
 }
 
 impl Passes<'_> {
     /// Runs the passes the configuration asks for.
     pub(crate) fn run(&mut self) -> Result<PassOutput, PipelineError> {
-        if self.config.selection.mode == SelectionMode::Poor {
-            self.poor_frames()
+        let mut out = if self.config.selection.mode == SelectionMode::Poor {
+            self.poor_frames()?
         } else if self.config.regenerator.needs_poses() {
-            self.inpainting()
+            self.inpainting()?
         } else {
             let (all, processed, cached) = self.pass(REGENERATED, self.grid(), None, &|_| true)?;
-            Ok(PassOutput {
+            PassOutput {
                 all,
                 from_cache: cached.len(),
                 processed,
                 original: None,
                 selection: SelectionRecord::default(),
-            })
-        }
+                blur_px: BTreeMap::new(),
+            }
+        };
+        out.blur_px = std::mem::take(&mut self.sharpness.blur_px);
+        Ok(out)
     }
 
     fn grid(&self) -> Order {
@@ -139,6 +147,7 @@ impl Passes<'_> {
             recent: Vec::new(),
             cached_frames: BTreeSet::new(),
             original_poses,
+            sharpness: &mut self.sharpness,
             subject: self.subject,
             // After the subject's last frame every pose is empty: no need to decode on.
             stop_after: self
@@ -232,6 +241,7 @@ impl Passes<'_> {
             from_cache,
             original: Some(original),
             selection,
+            blur_px: BTreeMap::new(),
         })
     }
 
@@ -276,6 +286,7 @@ impl Passes<'_> {
             from_cache: cached.len(),
             original: Some(original),
             selection: SelectionRecord::default(),
+            blur_px: BTreeMap::new(),
         })
     }
 }

@@ -17,6 +17,7 @@ use crate::plan::{self, Models};
 use crate::progress::{Progress, RunHandle};
 use crate::registry;
 use crate::selection::{self, SelectionMode, SelectionRecord};
+use crate::sharpness::Sharpness;
 use crate::subject;
 use crate::timings::Timings;
 use crate::{PipelineConfig, PipelineError, atomic, interpolate};
@@ -212,6 +213,7 @@ fn run_from(
         subject: subject.as_ref().map(|s| &s.boxes),
         range_end: subject.as_ref().map(|s| s.last_frame),
         bar: &bar,
+        sharpness: Sharpness::new(&names, fps, config.input.first_frame),
     }
     .run()?;
     let (model, decoding) = (
@@ -253,6 +255,7 @@ fn run_from(
             first_frame: config.input.first_frame,
             last_frame: config.input.last_frame,
             exif_orientation: info.orientations.clone(),
+            blur_px: out.blur_px.clone(),
         },
         config: serde_json::to_value(config).unwrap_or_default(),
         models: models.all(),
@@ -348,6 +351,7 @@ pub fn regenerate_part(
         subject: p.subject.as_ref().map(|s| &s.boxes),
         range_end: p.subject.as_ref().map(|s| s.last_frame),
         bar: &bar,
+        sharpness: Sharpness::new(&p.names, p.info.fps, config.input.first_frame),
     }
     .regenerate_part(part, parts)?;
     Ok(p.records.remove("regenerator").unwrap_or_default())
@@ -426,6 +430,7 @@ fn kinematics(
     kin_config
         .frame_size
         .get_or_insert([info.width, info.height]);
+    kin_config.image_blur_px = Some(summary.manifest.input.blur_px.clone());
     // A person's corrections saved in the run folder (by `gait review` or by
     // hand) apply to every rerun into that folder unless the config names a file.
     let saved = out.join("corrections.toml");

@@ -188,6 +188,8 @@ impl ReviewSource {
         if kin.frame_size.is_none() {
             kin.frame_size = frame_size;
         }
+        kin.image_blur_px =
+            gait_pipeline::RunBeside::find(&dir.join("keypoints.csv"))?.and_then(|b| b.blur_px);
         let input = video
             .as_ref()
             .ok()
@@ -258,7 +260,7 @@ impl ReviewSource {
             .ok()
             .and_then(|v| InputInfo::open(v).ok())
             .map(|i| [i.width, i.height])
-            .or_else(|| beside.and_then(|b| b.frame_size));
+            .or_else(|| beside.as_ref().and_then(|b| b.frame_size));
         let corrections_path = corrections.map_or_else(
             || keypoints.with_file_name("corrections.toml"),
             Path::to_path_buf,
@@ -269,6 +271,7 @@ impl ReviewSource {
         if kin.frame_size.is_none() {
             kin.frame_size = frame_size;
         }
+        kin.image_blur_px = beside.and_then(|b| b.blur_px);
         let size_set = kin.frame_size.map_or(String::new(), |[w, h]| {
             format!(" --set 'kinematics.frame_size=[{w}, {h}]'")
         });

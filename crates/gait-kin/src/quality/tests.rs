@@ -320,3 +320,47 @@ fn a_walker_too_small_in_the_image_is_rejected_and_named() {
     warn_small_subject(&c.t, &KinematicsConfig::default(), &mut warnings);
     assert!(warnings.is_empty());
 }
+
+/// Legs of about 300 px: a stride whose frames read a blur over 1.5 % of that (4.5 px) is
+/// rejected as blurred, judged by the median of its frames (one soft frame does not reject),
+/// the warning names the blur, the leg and the frames, and without measures nothing changes.
+#[test]
+fn a_blurred_walker_is_rejected_by_the_median_blur_of_each_stride() {
+    let c = Case::new();
+    let s = strides();
+    // Sharp everywhere but in the second stride, and one very soft frame in the first.
+    let mut blur: std::collections::BTreeMap<usize, f64> =
+        (0..180).step_by(5).map(|f| (f, 1.6)).collect();
+    for (_, b) in blur.range_mut(s[1].start..=s[1].end) {
+        *b = 6.0;
+    }
+    blur.insert(s[0].start + 5, 9.0);
+    let kin = KinematicsConfig {
+        image_blur_px: Some(blur),
+        ..KinematicsConfig::default()
+    };
+    let q = c.judge(&s, &kin);
+    let blurred: Vec<bool> = q
+        .iter()
+        .map(|q| q.reasons.contains(&Reason::Blurred))
+        .collect();
+    assert_eq!(blurred, vec![false, true, false, false], "{q:?}");
+    assert!(
+        (q[1].blur_px - 6.0).abs() < 1e-9 && (q[0].blur_px - 1.6).abs() < 1e-9,
+        "{q:?}"
+    );
+    let mut warnings = Vec::new();
+    warn_blurred(&q, &kin, &mut warnings);
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    let range = format!("frames {}-{}", s[1].start, s[1].end);
+    assert!(
+        warnings[0].contains("edges spread over 6.0 px") && warnings[0].contains(&range),
+        "{warnings:?}"
+    );
+    let unmeasured = c.judge(&s, &KinematicsConfig::default());
+    assert!(
+        unmeasured
+            .iter()
+            .all(|q| q.blur_px.is_nan() && !q.reasons.contains(&Reason::Blurred))
+    );
+}
