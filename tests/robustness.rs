@@ -323,7 +323,13 @@ fn a_blurred_walk_is_refused_with_its_measured_blur() {
         .expect("ffmpeg");
     assert!(status.success());
     let run = dir.path().join("run");
-    run_ok(&mut run_on(&video, &run));
+    let out = run_ok(&mut run_on(&video, &run));
+    // The run's last line says why there is no result.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("no complete gait cycle accepted (") && stderr.contains(" blurred)"),
+        "{stderr}"
+    );
 
     let manifest = read_json(&run.join("run.json"));
     let warnings = manifest["warnings"].to_string();

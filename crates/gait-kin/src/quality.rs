@@ -439,10 +439,12 @@ pub fn counts(q: &[CycleQuality]) -> (SideCounts, SideCounts) {
     (acc, rej)
 }
 
-/// One warning per reason that rejected a stride.
+/// One warning per reason that rejected a stride (blurred strides have their own, with the
+/// measures: [`warn_blurred`]).
 pub fn warnings(q: &[CycleQuality], kin: &KinematicsConfig) -> Vec<String> {
     REASONS
         .iter()
+        .filter(|&&r| r != Reason::Blurred)
         .filter_map(|&r| {
             let k = q.iter().filter(|c| c.reasons.contains(&r)).count();
             (k > 0).then(|| {

@@ -56,8 +56,23 @@ pub fn no_result_reason(kin: &gait_kin::KinResult) -> Option<String> {
     }
     let (yes, no) = (&kin.cycles_accepted, &kin.cycles_rejected);
     (yes.left + yes.right == 0).then(|| {
+        // The reasons, most frequent first: what a user can change (film closer, in focus).
+        let mut why: BTreeMap<&str, usize> = BTreeMap::new();
+        for q in &kin.cycle_quality {
+            for r in &q.reasons {
+                *why.entry(r.name()).or_default() += 1;
+            }
+        }
+        let mut why: Vec<(&str, usize)> = why.into_iter().collect();
+        why.sort_by_key(|w| std::cmp::Reverse(w.1));
+        let why: Vec<String> = why.iter().map(|(r, k)| format!("{k} {r}")).collect();
+        let why = if why.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", why.join(", "))
+        };
         format!(
-            "no complete gait cycle accepted ({} rejected)",
+            "no complete gait cycle accepted ({} rejected{why})",
             no.left + no.right
         )
     })
