@@ -250,14 +250,22 @@ fn the_page_saves_corrections_that_gait_kin_reproduces() {
 }
 
 #[test]
-fn only_the_token_holder_gets_anything_and_only_the_page_frames_and_data() {
+fn only_the_token_holder_gets_the_run_s_data_and_only_the_page_frames_and_data() {
     let work = tempfile::tempdir().unwrap();
     let run = copy_run(&work.path().join("run"));
     let server = Server::start(&[run.as_os_str()]);
-    for target in ["/", "/api/run", "/api/frame/50", "/?token=0123"] {
+    for target in ["/api/run", "/api/analysis", "/api/frame/50", "/api/run?token=0123"] {
         let (status, _) = server.request("GET", target, "");
         assert_eq!(status, 403, "{target}");
     }
+    // The page itself holds nothing of the run (a report's frame link opens it without the
+    // token, which the page keeps in the browser for this address).
+    let (status, page) = server.request("GET", "/?frame=90", "");
+    assert_eq!(status, 200);
+    assert!(
+        !page.contains(&*run.to_string_lossy()) && !page.contains("\"config\""),
+        "the tokenless page shows run data"
+    );
     let (status, _) = server.request("POST", "/api/corrections", "{}");
     assert_eq!(status, 403);
     assert!(!run.join("corrections.toml").exists());
@@ -558,4 +566,75 @@ fn a_back_view_shows_its_frontal_measures_and_takes_corrections() {
     let after: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert_eq!(after["view"], "posterior");
     assert_eq!(after["events"].as_array().unwrap().len(), before - 1);
+}
+
+/// A checklist finding followed from the report into `gait review`: the frame link of a
+/// report's finding opens the running review of that folder at its frame, the finding's row
+/// marked in the page's checklist. The link cannot carry the session's token (the report is
+/// written before the review starts): the page keeps it from the URL `gait review` printed.
+#[test]
+fn a_report_s_frame_link_opens_the_running_review_at_its_frame() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("kin");
+    // A tight normative band (0.2 SD) makes a finding of the sample's healthy walk.
+    run_ok(
+        gait()
+            .args(["kin", "--keypoints"])
+            .arg(sample_run().join("keypoints.csv"))
+            .arg("--out")
+            .arg(&out)
+            .args([
+                "--set",
+                "checklist.norm_sd=0.2",
+                "--set",
+                "report.pdf=false",
+            ]),
+    );
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let link = report
+        .split("class=\"review-link\" href=\"")
+        .nth(1)
+        .and_then(|rest| rest.split('"').next())
+        .unwrap_or_else(|| panic!("no frame link in the report's checklist"));
+    let frame: usize = link.split("frame=").nth(1).unwrap().parse().unwrap();
+
+    let server = Server::start(&[out.as_os_str()]);
+    assert!(
+        link.starts_with(&format!("http://{}/", server.addr())),
+        "the report links to {link}, the review serves {}",
+        server.url
+    );
+    // Without the token the page loads but none of the run's data does.
+    assert_eq!(
+        server.request("GET", &format!("/?frame={frame}"), "").0,
+        200
+    );
+    assert_eq!(server.request("GET", "/api/run", "").0, 403);
+
+    let result = work.path().join("link.json");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/review/link.cjs");
+    let mut node = Command::new("node");
+    node.arg(script)
+        .arg(&server.url)
+        .arg(link)
+        .arg(&result)
+        .env("NODE_PATH", node_modules());
+    if let Some(b) = gait_report::pdf::find_chromium() {
+        node.env("CHROMIUM", b);
+    }
+    let ran = node.output().expect("node runs");
+    assert!(
+        ran.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&ran.stdout),
+        String::from_utf8_lossy(&ran.stderr)
+    );
+    let shown = read_json(&result);
+    assert_eq!(shown["frame"], serde_json::json!(frame), "{shown}");
+    assert_ne!(shown["opened"], serde_json::json!(frame), "{shown}");
+    assert!(
+        shown["marked"].as_array().is_some_and(|m| !m.is_empty()),
+        "no checklist row marked at frame {frame}: {shown}"
+    );
+    assert_eq!(shown["problems"], serde_json::json!([]), "{shown}");
 }

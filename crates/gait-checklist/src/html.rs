@@ -54,7 +54,7 @@ impl Checklist {
             ""
         };
         let mut out = format!(
-            "<h2 id=\"checklist\">Amputee gait-deviation checklist</h2><p>Each item of the observational checklists (Berger 1992; Northwestern University Prosthetic-Orthotic Center) judged by a measure against a threshold with its source, per side. {}. This is a measurement, not a diagnosis. Also in checklist.csv.</p><table><thead><tr><th>Item</th><th>{}</th><th>{}</th><th>Threshold</th><th>Measure and source</th><th>Cycles (first frames)</th>{from_head}</tr></thead><tbody>",
+            "<h2 id=\"checklist\">Amputee gait-deviation checklist</h2><p>Each item of the observational checklists (Berger 1992; Northwestern University Prosthetic-Orthotic Center) judged by a measure against a threshold with its source, per side. {}. This is a measurement, not a diagnosis. Also in checklist.csv. A frame link opens that frame in <code>gait review</code> of its run folder while the review runs (<code>gait review RUN --open</code>; each run folder has its own address).</p><table><thead><tr><th>Item</th><th>{}</th><th>{}</th><th>Threshold</th><th>Measure and source</th><th>Cycles (first frames)</th>{from_head}</tr></thead><tbody>",
             escape(&level),
             escape(&side_name(Side::Left)),
             escape(&side_name(Side::Right)),
@@ -169,9 +169,11 @@ impl Checklist {
                 );
                 if let (Status::Present, Some(f)) = (v.status, v.frames.first()) {
                     // The page of `gait review` opens where the deviation shows most in the
-                    // first cycle that has it.
+                    // first cycle that has it: a link while the review runs, the command to
+                    // start it (and for the PDF).
                     c.push_str(&format!(
-                        "<br><code>gait review {} --frame {f}</code>",
+                        "<br><a class=\"review-link\" href=\"{}\">frame {f} in gait review</a> <code>gait review {} --frame {f}</code>",
+                        escape(&crate::review_url(std::path::Path::new(&v.run), *f)),
                         escape(&v.run)
                     ));
                 }

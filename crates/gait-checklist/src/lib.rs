@@ -12,6 +12,7 @@ mod config;
 mod frontal_items;
 mod html;
 mod judge;
+mod review_link;
 mod run_files;
 mod sagittal_items;
 mod trunk_arms;
@@ -26,6 +27,7 @@ use serde::Serialize;
 
 pub use config::ChecklistConfig;
 pub use gait_kin::Side;
+pub use review_link::{review_port, review_url};
 pub use run_files::{Param, RunFiles};
 pub use sagittal_items::pooled_timing;
 pub use verdict::{Item, Status, Verdict};

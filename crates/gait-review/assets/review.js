@@ -3,7 +3,12 @@
 // kinematics; the page keeps the corrections' undo history and draws.
 'use strict';
 (() => {
-  const token = new URLSearchParams(location.search).get('token') || '';
+  // The URL `gait review` printed carries the session's token; the page keeps it for this
+  // address (each run folder has its own port), so a report's frame link, which cannot know
+  // it, opens the same session.
+  const given = new URLSearchParams(location.search).get('token');
+  try { if (given) localStorage.setItem('gait-review-token', given); } catch (e) { /* storage off */ }
+  const token = given || (() => { try { return localStorage.getItem('gait-review-token'); } catch (e) { return null; } })() || '';
   const api = (path) => path + (path.includes('?') ? '&' : '?') + 'token=' + encodeURIComponent(token);
   const $ = (id) => document.getElementById(id);
   const COLOUR = { left: '#d62728', right: '#1f5fa8', upper: '#e8e8e8' };

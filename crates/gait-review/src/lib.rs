@@ -27,8 +27,11 @@ pub use source::ReviewSource;
 /// How to serve.
 #[derive(Debug, Clone, Default)]
 pub struct ServeOptions {
-    /// Port on 127.0.0.1; None picks a free one.
+    /// Port on 127.0.0.1 (taken or an error); None: `link_port`, else a free one.
     pub port: Option<u16>,
+    /// The port the run's report links to (`gait_checklist::review_port`): tried first when
+    /// no port is given; a free one if it is taken, with a warning.
+    pub link_port: Option<u16>,
     /// Launch the system's browser on the page.
     pub open: bool,
     /// The frame the page opens at (a checklist's frame), else the first walking bout's.
@@ -73,13 +76,7 @@ pub fn serve(src: ReviewSource, opts: &ServeOptions) -> Result<(), ReviewError> 
             source: e,
         })?;
     runtime.block_on(async {
-        let port = opts.port.unwrap_or(0);
-        let listener = server::bind(port).await.map_err(|e| ReviewError::Io {
-            context: format!(
-                "listening on 127.0.0.1:{port} (is the port in use? try another --port)"
-            ),
-            source: e,
-        })?;
+        let listener = listen(opts).await?;
         let addr = listener.local_addr().map_err(|e| ReviewError::Io {
             context: "reading the server's address".into(),
             source: e,
@@ -104,6 +101,23 @@ pub fn serve(src: ReviewSource, opts: &ServeOptions) -> Result<(), ReviewError> 
                 context: "serving the review".into(),
                 source: e,
             })
+    })
+}
+
+/// The listener on the port asked for, else the run's own port, else a free one.
+async fn listen(opts: &ServeOptions) -> Result<tokio::net::TcpListener, ReviewError> {
+    if let (None, Some(own)) = (opts.port, opts.link_port) {
+        match server::bind(own).await {
+            Ok(l) => return Ok(l),
+            Err(e) => eprintln!(
+                "warning: this run's own port 127.0.0.1:{own} is taken ({e}): serving on a free port, so the frame links of its report will not reach this review"
+            ),
+        }
+    }
+    let port = opts.port.unwrap_or(0);
+    server::bind(port).await.map_err(|e| ReviewError::Io {
+        context: format!("listening on 127.0.0.1:{port} (is the port in use? try another --port)"),
+        source: e,
     })
 }
 

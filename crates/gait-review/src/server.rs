@@ -33,16 +33,19 @@ pub(crate) struct App {
 
 type Shared = Arc<App>;
 
-/// The routes, behind the token check.
+/// The routes: the page, and its data behind the token check.
 pub(crate) fn router(app: Shared) -> Router {
+    // The page itself holds no data: a report's frame link opens it without the token, which
+    // the page then takes from the browser's storage for this address.
+    let open = Router::new().route("/", get(index));
     Router::new()
-        .route("/", get(index))
         .route("/api/run", get(run_data))
         .route("/api/analysis", get(current_analysis))
         .route("/api/corrections", post(save_corrections))
         .route("/api/frame/{n}", get(frame))
         .layer(middleware::from_fn_with_state(app.clone(), require_token))
         .with_state(app)
+        .merge(open)
 }
 
 /// Binds the loopback interface only: `port` 0 lets the system pick a free port.

@@ -28,7 +28,8 @@ pub struct Args {
     /// Where corrections are saved (with --keypoints) [default: corrections.toml beside the keypoints]
     #[arg(long, value_name = "FILE")]
     corrections: Option<PathBuf>,
-    /// Port on 127.0.0.1 [default: a free one]
+    /// Port on 127.0.0.1 [default: the run folder's own, which its report's frame links open,
+    /// else a free one]
     #[arg(long, value_name = "N")]
     port: Option<u16>,
     /// Open the page in the system browser
@@ -71,8 +72,25 @@ pub fn execute(args: Args) -> Result<(), CliError> {
     if let Err(why) = &src.video {
         eprintln!("warning: {why}");
     }
+    // A run folder's own port, or that of the folder of the keypoints (a `gait kin` output).
+    let folder = args
+        .run_dir
+        .clone()
+        .or_else(|| {
+            args.keypoints
+                .as_ref()
+                .and_then(|k| k.parent().map(|p| p.to_path_buf()))
+        })
+        .map(|d| {
+            if d.as_os_str().is_empty() {
+                ".".into()
+            } else {
+                d
+            }
+        });
     let opts = ServeOptions {
         port: args.port,
+        link_port: folder.as_deref().map(gait_checklist::review_port),
         open: args.open,
         frame: args.frame,
     };
