@@ -282,3 +282,22 @@ fn a_range_past_the_end_of_the_video() {
     assert_no_results(&out);
     assert!(!out.exists(), "a failed run left an empty folder behind");
 }
+
+/// The walker seen for 1.2 s only (frames 150-192 of the sample): a walking bout, but no foot
+/// strikes twice in it. Before, the run said "no complete gait cycle accepted (0 rejected)",
+/// which named nothing to change.
+#[test]
+fn a_walk_too_short_for_a_stride_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let done =
+        common::run_ok(common::sample_run(&out, 150, 192).args(["--set", "report.overlay=false"]));
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert!(
+        err.contains("no result: no complete gait cycle: no foot has two heel strikes within a walking bout (frames 150-")
+            && err.contains("seen for a whole stride"),
+        "{err}"
+    );
+    let run = common::read_json(&out.join("run.json"));
+    assert_eq!(run["status"], "no_result", "{}", run["status"]);
+}

@@ -254,7 +254,12 @@ fn only_the_token_holder_gets_the_run_s_data_and_only_the_page_frames_and_data()
     let work = tempfile::tempdir().unwrap();
     let run = copy_run(&work.path().join("run"));
     let server = Server::start(&[run.as_os_str()]);
-    for target in ["/api/run", "/api/analysis", "/api/frame/50", "/api/run?token=0123"] {
+    for target in [
+        "/api/run",
+        "/api/analysis",
+        "/api/frame/50",
+        "/api/run?token=0123",
+    ] {
         let (status, _) = server.request("GET", target, "");
         assert_eq!(status, 403, "{target}");
     }

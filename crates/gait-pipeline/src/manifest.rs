@@ -55,6 +55,17 @@ pub fn no_result_reason(kin: &gait_kin::KinResult) -> Option<String> {
         return Some("no walking bout found".into());
     }
     let (yes, no) = (&kin.cycles_accepted, &kin.cycles_rejected);
+    if kin.cycle_quality.is_empty() {
+        let bouts: Vec<String> = kin
+            .bouts
+            .iter()
+            .map(|b| format!("{}-{}", b.first, b.last))
+            .collect();
+        return Some(format!(
+            "no complete gait cycle: no foot has two heel strikes within a walking bout (frames {}); the walker must be seen for a whole stride",
+            bouts.join(", ")
+        ));
+    }
     (yes.left + yes.right == 0).then(|| {
         // The reasons, most frequent first: what a user can change (film closer, in focus).
         let mut why: BTreeMap<&str, usize> = BTreeMap::new();
