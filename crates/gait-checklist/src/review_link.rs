@@ -6,11 +6,13 @@
 
 use std::path::Path;
 
-/// Run folders' ports: 42000-48999, clear of the services machines commonly run. Linux draws
-/// outgoing connections' local ports from 32768-60999, so one may be taken now and then: then
-/// `gait review` serves on a free port and says that the report's links will not reach it.
-const FIRST: u16 = 42000;
-const SPAN: u64 = 7000;
+/// Run folders' ports: 20000-24999, below the ranges systems draw outgoing connections' local
+/// ports from (Linux 32768-60999, macOS and Windows 49152-65535), where a busy machine's own
+/// connections would take one now and then. A port that is taken (another program, or another
+/// folder's review on the same port) makes `gait review` serve on a free one and say that the
+/// report's links will not reach it.
+const FIRST: u16 = 20000;
+const SPAN: u64 = 5000;
 
 /// The port `gait review` serves the run folder `run` on by default.
 pub fn review_port(run: &Path) -> u16 {
