@@ -300,10 +300,10 @@ fn run_chain(
         excluded: &fixes.exclude,
         size: frontal_scale.as_ref().map(|s| &s.size[..]),
     };
-    quality::warn_small_subject(t, kin, &mut warnings);
+    quality::warn::small_subject(t, kin, &mut warnings);
     let cycle_quality = quality::assess(&evidence, &strides, kin);
-    quality::warn_blurred(&cycle_quality, kin, &mut warnings);
-    warnings.extend(quality::warnings(&cycle_quality, kin));
+    quality::warn::blurred(&cycle_quality, kin, &mut warnings);
+    warnings.extend(quality::warn::per_reason(&cycle_quality, kin));
     let (cycles_accepted, cycles_rejected) = quality::counts(&cycle_quality);
     let accepted = quality::accepted(&cycle_quality);
     let cycles = match frontal_scale {

@@ -72,7 +72,7 @@ impl Reason {
         }
     }
 
-    fn describe(self, kin: &KinematicsConfig) -> String {
+    pub(crate) fn describe(self, kin: &KinematicsConfig) -> String {
         match self {
             Reason::StrideTime => format!(
                 "stride time more than {:.0} % from the median stride time",
@@ -439,26 +439,6 @@ pub fn counts(q: &[CycleQuality]) -> (SideCounts, SideCounts) {
     (acc, rej)
 }
 
-/// One warning per reason that rejected a stride (blurred strides have their own, with the
-/// measures: [`warn_blurred`]).
-pub fn warnings(q: &[CycleQuality], kin: &KinematicsConfig) -> Vec<String> {
-    REASONS
-        .iter()
-        .filter(|&&r| r != Reason::Blurred)
-        .filter_map(|&r| {
-            let k = q.iter().filter(|c| c.reasons.contains(&r)).count();
-            (k > 0).then(|| {
-                format!(
-                    "{k} of {} strides rejected ({}): {} (see cycle_quality.csv)",
-                    q.len(),
-                    r.name(),
-                    r.describe(kin)
-                )
-            })
-        })
-        .collect()
-}
-
 /// Whether a step between heel strikes at input frames `from` and `to` counts for the
 /// spatiotemporal parameters: not when every stride around it was rejected, and, where bouts
 /// are enforced, only inside one bout.
@@ -482,47 +462,7 @@ pub fn step_ok(
     around.peek().is_none() || around.any(|c| c.accepted)
 }
 
-/// A walker too blurred for the pose model: the measured blur, the leg and the strides' frames.
-pub(crate) fn warn_blurred(q: &[CycleQuality], kin: &KinematicsConfig, warnings: &mut Vec<String>) {
-    let blurred: Vec<&CycleQuality> = q
-        .iter()
-        .filter(|c| c.reasons.contains(&Reason::Blurred))
-        .collect();
-    let first = blurred.iter().map(|c| c.first_frame).min();
-    let last = blurred.iter().map(|c| c.last_frame).max();
-    let (Some(a), Some(b)) = (first, last) else {
-        return;
-    };
-    let mut blur: Vec<f64> = blurred.iter().map(|c| c.blur_px).collect();
-    let mut leg: Vec<f64> = blurred.iter().map(|c| c.leg_px).collect();
-    let (blur, leg) = (median(&mut blur), median(&mut leg));
-    warnings.push(format!(
-        "the subject's legs are blurred in the image: edges spread over {blur:.1} px (median over the strides of frames {}-{}), {:.1} % of the legs' {leg:.0} px, over kinematics.cycle_max_blur_share = {:.1} %: too blurred for reliable keypoints, so {} strides are rejected (blurred; cycle_quality.csv, blur_px); film in focus, in more light or with a shorter exposure",
-        a,
-        b,
-        100.0 * blur / leg,
-        100.0 * kin.cycle_max_blur_share,
-        blurred.len()
-    ));
-}
-
-/// A walker too small in the image for the pose model: the measured leg and the frames.
-pub(crate) fn warn_small_subject(t: &Tracks, kin: &KinematicsConfig, warnings: &mut Vec<String>) {
-    let leg = t.leg_length();
-    if !(leg.is_finite() && leg < kin.cycle_min_leg_px) {
-        return;
-    }
-    let seen: Vec<usize> = (0..t.len()).filter(|&i| t.pelvis(i).is_some()).collect();
-    let (Some(a), Some(b)) = (seen.first(), seen.last()) else {
-        return;
-    };
-    warnings.push(format!(
-        "the subject's legs are {leg:.0} px long in the image (thigh + shank, median over frames {}-{}), under kinematics.cycle_min_leg_px = {}: too small for reliable keypoints, so strides are rejected (small_subject); film closer or at a higher resolution",
-        t.first_frame + a,
-        t.first_frame + b,
-        kin.cycle_min_leg_px
-    ));
-}
+pub(crate) mod warn;
 
 #[cfg(test)]
 mod tests;

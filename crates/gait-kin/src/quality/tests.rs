@@ -83,7 +83,7 @@ fn clean_strides_are_accepted_with_their_numbers() {
     assert!((q0.mean_likelihood - 0.9).abs() < 1e-12 && q0.max_filled_s == 0.0);
     assert!((q0.thigh_ratio - 1.0).abs() < 0.1 && (q0.shank_ratio - 1.0).abs() < 0.1);
     assert_eq!(counts(&q).0, SideCounts { left: 4, right: 0 });
-    assert!(warnings(&q, &KinematicsConfig::default()).is_empty());
+    assert!(warn::per_reason(&q, &KinematicsConfig::default()).is_empty());
 }
 
 #[test]
@@ -180,7 +180,7 @@ fn a_stride_across_two_bouts_is_rejected() {
         q.iter().map(|q| q.bout).collect::<Vec<_>>(),
         vec![Some(0), None, Some(1), Some(1)]
     );
-    let w = warnings(&q, &KinematicsConfig::default());
+    let w = warn::per_reason(&q, &KinematicsConfig::default());
     assert_eq!(w.len(), 1);
     assert!(
         w[0].starts_with("1 of 4 strides rejected (crosses_bout)"),
@@ -271,7 +271,7 @@ fn strides_over_excluded_frames_are_rejected() {
     );
     // Excluded strides leave the median stride time alone.
     assert_eq!(q[0].stride_deviation, 0.0, "{:?}", q[0]);
-    let w = warnings(&q, &KinematicsConfig::default());
+    let w = warn::per_reason(&q, &KinematicsConfig::default());
     assert!(
         w.contains(&"3 of 4 strides rejected (excluded): over frames excluded in the corrections (see cycle_quality.csv)".to_string()),
         "{w:?}"
@@ -305,7 +305,7 @@ fn a_walker_too_small_in_the_image_is_rejected_and_named() {
         "{q:?}"
     );
     let mut warnings = Vec::new();
-    warn_small_subject(&c.t, &small, &mut warnings);
+    warn::small_subject(&c.t, &small, &mut warnings);
     assert_eq!(warnings.len(), 1);
     assert!(
         warnings[0].contains("px long") && warnings[0].contains("frames 0-179"),
@@ -317,7 +317,7 @@ fn a_walker_too_small_in_the_image_is_rejected_and_named() {
     };
     assert!(c.judge(&strides(), &off).iter().all(|q| q.accepted));
     warnings.clear();
-    warn_small_subject(&c.t, &KinematicsConfig::default(), &mut warnings);
+    warn::small_subject(&c.t, &KinematicsConfig::default(), &mut warnings);
     assert!(warnings.is_empty());
 }
 
@@ -350,7 +350,7 @@ fn a_blurred_walker_is_rejected_by_the_median_blur_of_each_stride() {
         "{q:?}"
     );
     let mut warnings = Vec::new();
-    warn_blurred(&q, &kin, &mut warnings);
+    warn::blurred(&q, &kin, &mut warnings);
     assert_eq!(warnings.len(), 1, "{warnings:?}");
     let range = format!("frames {}-{}", s[1].start, s[1].end);
     assert!(
