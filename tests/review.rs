@@ -104,6 +104,26 @@ fn node_modules() -> String {
 }
 
 /// angles.csv as `column -> cells` (cells as written: 6 decimals, empty when undefined).
+/// Runs `tests/review/SCRIPT` in node with `args`: it drives Debian's Chromium over the
+/// DevTools protocol and must succeed.
+fn in_browser(script: &str, args: &[&std::ffi::OsStr]) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/review")
+        .join(script);
+    let mut node = Command::new("node");
+    node.arg(path).args(args).env("NODE_PATH", node_modules());
+    if let Some(b) = gait_report::pdf::find_chromium() {
+        node.env("CHROMIUM", b);
+    }
+    let out = node.output().expect("node runs");
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn angles_csv(path: &Path) -> Vec<(String, Vec<String>)> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
@@ -136,22 +156,13 @@ fn the_page_saves_corrections_that_gait_kin_reproduces() {
     });
     let shots = work.path().join("browser");
     std::fs::create_dir_all(&shots).unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/review/browser.cjs");
-    let mut node = Command::new("node");
-    node.arg(script)
-        .arg(&server.url)
-        .arg(&shots)
-        .arg(plan.to_string())
-        .env("NODE_PATH", node_modules());
-    if let Some(b) = gait_report::pdf::find_chromium() {
-        node.env("CHROMIUM", b);
-    }
-    let out = node.output().expect("node runs");
-    assert!(
-        out.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
+    in_browser(
+        "browser.cjs",
+        &[
+            server.url.as_ref(),
+            shots.as_os_str(),
+            plan.to_string().as_ref(),
+        ],
     );
     drop(server);
     let page = read_json(&shots.join("result.json"));
@@ -617,22 +628,9 @@ fn a_report_s_frame_link_opens_the_running_review_at_its_frame() {
     assert_eq!(server.request("GET", "/api/run", "").0, 403);
 
     let result = work.path().join("link.json");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/review/link.cjs");
-    let mut node = Command::new("node");
-    node.arg(script)
-        .arg(&server.url)
-        .arg(link)
-        .arg(&result)
-        .env("NODE_PATH", node_modules());
-    if let Some(b) = gait_report::pdf::find_chromium() {
-        node.env("CHROMIUM", b);
-    }
-    let ran = node.output().expect("node runs");
-    assert!(
-        ran.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&ran.stdout),
-        String::from_utf8_lossy(&ran.stderr)
+    in_browser(
+        "link.cjs",
+        &[server.url.as_ref(), link.as_ref(), result.as_os_str()],
     );
     let shown = read_json(&result);
     assert_eq!(shown["frame"], serde_json::json!(frame), "{shown}");
