@@ -16,6 +16,9 @@ pub fn escape(s: &str) -> String {
     out
 }
 
+/// Tables of more columns than this are `wide` (report.rs's print style).
+const WIDE: usize = 14;
+
 /// An HTML table with a header row; cells are escaped, except that a cell
 /// wrapped in `**` is shown bold (as in table.md).
 pub fn table(header: &[String], rows: &[Vec<String>]) -> String {
@@ -23,7 +26,12 @@ pub fn table(header: &[String], rows: &[Vec<String>]) -> String {
         Some(b) => format!("<{tag}><b>{}</b></{tag}>", escape(b)),
         None => format!("<{tag}>{}</{tag}>", escape(s)),
     };
-    let mut out = String::from("<table><thead><tr>");
+    // A table of many columns (cycle_quality.csv's 16) is printed smaller to fit an A4 page.
+    let mut out = String::from(if header.len() > WIDE {
+        "<table class=\"wide\"><thead><tr>"
+    } else {
+        "<table><thead><tr>"
+    });
     for h in header {
         // Column names like swapped_frames may break after an underscore to fit a printed page.
         out.push_str(&cell("th", h).replace('_', "_<wbr>"));

@@ -107,7 +107,8 @@ video{max-width:100%;border:1px solid #ddd}.no-cycles{color:#8a4b00;font-weight:
 table.provenance td{font-family:monospace;overflow-wrap:anywhere}\
 @page{size:A4;margin:12mm}\
 @media print{body{margin:0;max-width:none}figure{break-inside:avoid}tr{break-inside:avoid}video,details.manifest{display:none}h2{break-after:avoid}\
-table{width:100%;table-layout:auto}td,th{font-size:8.5px;padding:2px 3px}}";
+table{width:100%;table-layout:auto}td,th{font-size:8.5px;padding:2px 3px}\
+table.wide td,table.wide th{font-size:7.5px;padding:1px 2px}}";
 
 /// The largest overlay.mp4 embedded in report.html (base64 adds a third): a page that plays
 /// its video anywhere, without growing past a few MB.
