@@ -604,40 +604,52 @@ fn scale_arm_swing(src: &Path, dst: &Path, side: &str, k: f64) {
 /// sample's run, its right arm's swing scaled about the shoulder. Halved (a symmetry index of
 /// about 67 %, threshold 50 %) it is found on the right only; at 0.8 (about 22 %) and
 /// unmodified nothing is found.
+/// One run of frames 40-200 of the sample, shared by the plants on real video keypoints.
+fn sample_run() -> &'static Path {
+    static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap().keep().join("run");
+        run_ok(common::sample_run(&dir, 40, 200).args(["--set", "report.pdf=false"]));
+        dir
+    })
+}
+
+/// `gait kin` on the sample run's keypoints changed by `plant` (source, destination) in
+/// `dir`; the verdicts of checklist item `item` (left, right), printed with their values.
+fn planted_verdicts(dir: &Path, item: &str, plant: impl Fn(&Path, &Path)) -> (String, String) {
+    let run = sample_run();
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::copy(run.join("run.json"), dir.join("run.json")).unwrap();
+    plant(&run.join("keypoints.csv"), &dir.join("keypoints.csv"));
+    run_ok(
+        gait()
+            .args(["kin", "--keypoints"])
+            .arg(dir.join("keypoints.csv"))
+            .arg("--out")
+            .arg(dir)
+            .args(["--set", "report.pdf=false"]),
+    );
+    let mut r = csv::Reader::from_path(dir.join("checklist.csv")).unwrap();
+    let rows: Vec<csv::StringRecord> = r.records().map(Result::unwrap).collect();
+    let of = |side: &str| {
+        let row = rows
+            .iter()
+            .find(|r| &r[0] == item && &r[1] == side)
+            .unwrap();
+        eprintln!("{} {item} {side}: {} {}", dir.display(), &row[2], &row[4]);
+        row[2].to_string()
+    };
+    (of("left"), of("right"))
+}
+
 #[test]
 fn a_planted_uneven_arm_swing_is_found_on_its_side_only() {
     let work = tempfile::tempdir().unwrap();
-    let run = work.path().join("run");
-    run_ok(common::sample_run(&run, 40, 200).args(["--set", "report.pdf=false"]));
     let verdicts = |k: f64| {
         let dir = work.path().join(format!("arm-{k}"));
-        std::fs::create_dir_all(&dir).unwrap();
-        std::fs::copy(run.join("run.json"), dir.join("run.json")).unwrap();
-        scale_arm_swing(
-            &run.join("keypoints.csv"),
-            &dir.join("keypoints.csv"),
-            "right",
-            k,
-        );
-        run_ok(
-            gait()
-                .args(["kin", "--keypoints"])
-                .arg(dir.join("keypoints.csv"))
-                .arg("--out")
-                .arg(&dir)
-                .args(["--set", "report.pdf=false"]),
-        );
-        let mut r = csv::Reader::from_path(dir.join("checklist.csv")).unwrap();
-        let rows: Vec<csv::StringRecord> = r.records().map(Result::unwrap).collect();
-        let of = |side: &str| {
-            let row = rows
-                .iter()
-                .find(|r| &r[0] == "uneven_arm_swing" && &r[1] == side)
-                .unwrap();
-            eprintln!("arm swing x{k} {side}: {} {} deg", &row[2], &row[4]);
-            row[2].to_string()
-        };
-        (of("left"), of("right"))
+        planted_verdicts(&dir, "uneven_arm_swing", |src, dst| {
+            scale_arm_swing(src, dst, "right", k)
+        })
     };
     let (absent, present) = ("absent".to_string(), "present".to_string());
     assert_eq!(verdicts(1.0), (absent.clone(), absent.clone()));
