@@ -17,8 +17,50 @@ pub fn describe(run: &Value) -> Vec<String> {
     if let Some(k) = kin {
         bouts(k, &mut lines);
         cycles(k, &mut lines);
+        image(k, run.pointer("/config/kinematics"), &mut lines);
     }
     lines
+}
+
+/// How large and how sharp the subject's legs were in the image, over every stride found,
+/// against the limits that reject a stride (`cycle_min_leg_px`, `cycle_max_blur_share`): a
+/// reader sees how far the video was from being too small or too blurred.
+fn image(k: &Value, limits: Option<&Value>, lines: &mut Vec<String>) {
+    let Some(all) = k.get("cycle_quality").and_then(Value::as_array) else {
+        return;
+    };
+    let median = |key: &str| {
+        let mut v: Vec<f64> = all
+            .iter()
+            .filter_map(|c| c.get(key).and_then(Value::as_f64))
+            .filter(|v| v.is_finite())
+            .collect();
+        v.sort_by(f64::total_cmp);
+        (!v.is_empty()).then(|| v[v.len() / 2])
+    };
+    let limit = |key: &str| limits.and_then(|l| l.get(key)).and_then(Value::as_f64);
+    let Some(leg) = median("leg_px") else {
+        return;
+    };
+    let mut line = format!(
+        "Image: the legs {leg:.0} px long (thigh + shank, median over the {} strides found",
+        all.len()
+    );
+    if let Some(min) = limit("cycle_min_leg_px").filter(|m| *m > 0.0) {
+        line += &format!("; a stride under {min:.0} px is rejected");
+    }
+    line += ")";
+    if let Some(blur) = median("blur_px") {
+        line += &format!(
+            ", their outline blurred over {blur:.1} px ({:.1} % of the leg",
+            100.0 * blur / leg
+        );
+        if let Some(max) = limit("cycle_max_blur_share").filter(|m| *m > 0.0) {
+            line += &format!("; over {:.1} % a stride is rejected", 100.0 * max);
+        }
+        line += ")";
+    }
+    lines.push(line + ".");
 }
 
 fn subject(s: &Value, lines: &mut Vec<String>) {
@@ -162,8 +204,12 @@ mod tests {
             },
             "extra": {"kinematics": {
                 "bouts": [{"first": 55, "last": 185, "direction": "left", "mean_speed": 0.8}],
-                "cycle_quality": [{"side": "left", "accepted": true}, {"side": "left", "accepted": false}]
-            }}
+                "cycle_quality": [
+                    {"side": "left", "accepted": true, "leg_px": 186.9, "blur_px": 1.66},
+                    {"side": "left", "accepted": false, "leg_px": 192.0, "blur_px": null}
+                ]
+            }},
+            "config": {"kinematics": {"cycle_min_leg_px": 100.0, "cycle_max_blur_share": 0.015}}
         });
         let lines = describe(&run);
         assert!(
@@ -177,6 +223,10 @@ mod tests {
             "{lines:?}"
         );
         assert!(lines[4].contains("1 accepted, 1 rejected"), "{lines:?}");
+        assert_eq!(
+            lines[6],
+            "Image: the legs 192 px long (thigh + shank, median over the 2 strides found; a stride under 100 px is rejected), their outline blurred over 1.7 px (0.9 % of the leg; over 1.5 % a stride is rejected)."
+        );
         assert!(describe(&serde_json::json!({})).is_empty());
     }
 }
