@@ -296,6 +296,12 @@ fn a_visit_of_the_sample_and_its_mirror_takes_each_side_from_its_near_view() {
     );
     assert!(html.contains("right sagittal curves: right view (mirrored.mp4) (near the camera)"));
     assert!(html.contains("Amputee gait-deviation checklist"));
+    // Each pass says how large and sharp the legs were: the sample and its mirror alike.
+    assert_eq!(
+        html.matches("In the image: the legs ").count(),
+        2,
+        "each pass's image line"
+    );
 }
 
 /// Progress across visits: the Parkinson's walk unmodified, then with the right hip hiking 10

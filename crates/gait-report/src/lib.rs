@@ -12,6 +12,6 @@ pub mod provenance;
 pub mod report;
 mod run_dir;
 pub mod spatiotemporal;
-mod subject_lines;
+pub mod subject_lines;
 
 pub use report::{Report, Table};

@@ -17,18 +17,25 @@ pub fn describe(run: &Value) -> Vec<String> {
     if let Some(k) = kin {
         bouts(k, &mut lines);
         cycles(k, &mut lines);
-        image(k, run.pointer("/config/kinematics"), &mut lines);
     }
+    lines.extend(legs_in_image(run).map(|l| format!("Image: {l}")));
     lines
 }
 
-/// How large and how sharp the subject's legs were in the image, over every stride found,
-/// against the limits that reject a stride (`cycle_min_leg_px`, `cycle_max_blur_share`): a
-/// reader sees how far the video was from being too small or too blurred.
-fn image(k: &Value, limits: Option<&Value>, lines: &mut Vec<String>) {
-    let Some(all) = k.get("cycle_quality").and_then(Value::as_array) else {
-        return;
-    };
+/// How large and how sharp the subject's legs were in the image of a run (its run.json), over
+/// every stride found, against the limits that reject a stride (`cycle_min_leg_px`,
+/// `cycle_max_blur_share`): a reader sees how far the video was from too small or too blurred.
+/// `None` without strides.
+pub fn legs_in_image(run: &Value) -> Option<String> {
+    let k = run
+        .get("kinematics")
+        .or_else(|| run.pointer("/extra/kinematics"))?;
+    image(k, run.pointer("/config/kinematics"))
+}
+
+/// [`legs_in_image`] of the kinematics summary `k` and the settings `limits`.
+fn image(k: &Value, limits: Option<&Value>) -> Option<String> {
+    let all = k.get("cycle_quality").and_then(Value::as_array)?;
     let median = |key: &str| {
         let mut v: Vec<f64> = all
             .iter()
@@ -39,11 +46,9 @@ fn image(k: &Value, limits: Option<&Value>, lines: &mut Vec<String>) {
         (!v.is_empty()).then(|| v[v.len() / 2])
     };
     let limit = |key: &str| limits.and_then(|l| l.get(key)).and_then(Value::as_f64);
-    let Some(leg) = median("leg_px") else {
-        return;
-    };
+    let leg = median("leg_px")?;
     let mut line = format!(
-        "Image: the legs {leg:.0} px long (thigh + shank, median over the {} strides found",
+        "the legs {leg:.0} px long (thigh + shank, median over the {} strides found",
         all.len()
     );
     if let Some(min) = limit("cycle_min_leg_px").filter(|m| *m > 0.0) {
@@ -60,7 +65,7 @@ fn image(k: &Value, limits: Option<&Value>, lines: &mut Vec<String>) {
         }
         line += ")";
     }
-    lines.push(line + ".");
+    Some(line + ".")
 }
 
 fn subject(s: &Value, lines: &mut Vec<String>) {

@@ -293,6 +293,7 @@ mod tests {
             fps: Some(30.0),
             warnings: Vec::new(),
             near: Vec::new(),
+            image: None,
         }
     }
 

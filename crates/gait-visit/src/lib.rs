@@ -88,8 +88,12 @@ pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSumma
     report.subject = passes
         .iter()
         .map(|p| {
+            let image = p
+                .image
+                .as_ref()
+                .map_or(String::new(), |l| format!(" In the image: {l}"));
             format!(
-                "{}: {}; run folder {}",
+                "{}: {}; run folder {}.{image}",
                 p.label(),
                 p.status,
                 p.dir.display()
@@ -205,6 +209,7 @@ mod tests {
             fps: Some(fps),
             warnings: warnings.iter().map(|w| w.to_string()).collect(),
             near: Vec::new(),
+            image: None,
         }
     }
 

@@ -32,6 +32,9 @@ pub struct Pass {
     /// The sides with an accepted cycle near the camera (a side view's walk toward the image's
     /// left shows the left side; a walk there and back shows both).
     pub near: Vec<String>,
+    /// How large and how sharp the legs were in the pass's image (the run report's "Image"
+    /// line), when it has strides.
+    pub image: Option<String>,
 }
 
 impl Pass {
@@ -78,6 +81,7 @@ impl Pass {
             spatiotemporal: spatiotemporal.unwrap_or_default(),
             status,
             fps: manifest["input"]["fps"].as_f64(),
+            image: gait_report::subject_lines::legs_in_image(&manifest),
             warnings,
             near: near_sides(dir),
         })
