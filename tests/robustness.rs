@@ -63,6 +63,16 @@ fn same_cycles(a: &[(String, i64, i64)], b: &[(String, i64, i64)]) -> bool {
             .all(|(x, y)| x.0 == y.0 && (x.1 - y.1).abs() <= 1 && (x.2 - y.2).abs() <= 1)
 }
 
+/// `gait kin --keypoints KEYPOINTS --out OUT`.
+fn kin_on(keypoints: impl AsRef<std::ffi::OsStr>, out: impl AsRef<std::ffi::OsStr>) -> Command {
+    let mut cmd = gait();
+    cmd.args(["kin", "--keypoints"])
+        .arg(keypoints)
+        .arg("--out")
+        .arg(out);
+    cmd
+}
+
 fn reencode(src: &Path, dst: &Path) {
     let status = Command::new("ffmpeg")
         .args(["-v", "error", "-y", "-i"])
@@ -117,13 +127,7 @@ fn a_reencoded_video_a_run_s_keypoints_and_a_model_without_feet_give_the_same_an
     // `gait kin` on the run's keypoints.csv, no --fps: run.json beside it gives the frame
     // rate, the frame size (the bout rules) and the settings.
     let kin = dir.path().join("kin");
-    run_ok(
-        gait()
-            .args(["kin", "--keypoints"])
-            .arg(original.join("keypoints.csv"))
-            .arg("--out")
-            .arg(&kin),
-    );
+    run_ok(&mut kin_on(original.join("keypoints.csv"), &kin));
     assert_eq!(events(&kin), ev);
     assert_eq!(accepted(&kin), cycles);
     for file in ["bouts.csv", "cycle_quality.csv"] {
@@ -174,13 +178,7 @@ fn a_reencoded_video_a_run_s_keypoints_and_a_model_without_feet_give_the_same_an
         &nofeet.join("keypoints.csv"),
     );
     let kin = nofeet.join("kin");
-    let out = run_ok(
-        gait()
-            .args(["kin", "--keypoints"])
-            .arg(nofeet.join("keypoints.csv"))
-            .arg("--out")
-            .arg(&kin),
-    );
+    let out = run_ok(&mut kin_on(nofeet.join("keypoints.csv"), &kin));
     assert!(String::from_utf8_lossy(&out.stderr).contains("from left_ankle/left_ankle"));
     let (matched, extra) = agreement(&ev, &events(&kin));
     assert!(
@@ -349,24 +347,15 @@ fn a_blurred_walk_is_refused_with_its_measured_blur() {
     // The run's keypoints alone judge alike (the measures travel in run.json), and with the
     // check off the strides come back: the blur alone rejected them.
     let kin = dir.path().join("kin");
-    run_ok(
-        gait()
-            .args(["kin", "--keypoints"])
-            .arg(run.join("keypoints.csv"))
-            .arg("--out")
-            .arg(&kin),
-    );
+    run_ok(&mut kin_on(run.join("keypoints.csv"), &kin));
     assert_eq!(
         std::fs::read_to_string(kin.join("cycle_quality.csv")).unwrap(),
         table
     );
     let off = dir.path().join("off");
     run_ok(
-        gait()
-            .args(["kin", "--keypoints"])
-            .arg(run.join("keypoints.csv"))
-            .args(["--set", "kinematics.cycle_max_blur_share=0", "--out"])
-            .arg(&off),
+        kin_on(run.join("keypoints.csv"), &off)
+            .args(["--set", "kinematics.cycle_max_blur_share=0"]),
     );
     assert!(!accepted(&off).is_empty());
 }
