@@ -4,14 +4,15 @@
 //! What the page saved and shows must equal what `gait kin --corrections` computes.
 
 mod common;
+#[path = "review/support.rs"]
+mod support;
 
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::Stdio;
 use std::sync::OnceLock;
 
 use common::{fails_with, gait, read_json, run_ok, sample_video};
+use support::{Server, in_browser};
 
 /// One run of frames 40-200 of the sample, shared by the tests of this file.
 fn sample_run() -> &'static Path {
@@ -32,98 +33,7 @@ fn copy_run(to: &Path) -> PathBuf {
     to.to_path_buf()
 }
 
-/// `gait review ...` running on a free port; killed when dropped.
-struct Server {
-    child: Child,
-    url: String,
-}
-
-impl Server {
-    fn start(args: &[&std::ffi::OsStr]) -> Server {
-        let mut child = gait()
-            .arg("review")
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("gait review starts");
-        let mut line = String::new();
-        BufReader::new(child.stdout.as_mut().unwrap())
-            .read_line(&mut line)
-            .unwrap();
-        let url = line.trim().to_string();
-        assert!(url.starts_with("http://127.0.0.1:"), "printed {url:?}");
-        Server { child, url }
-    }
-
-    fn token(&self) -> &str {
-        self.url.split("token=").nth(1).unwrap()
-    }
-
-    fn addr(&self) -> &str {
-        self.url
-            .trim_start_matches("http://")
-            .split('/')
-            .next()
-            .unwrap()
-    }
-
-    /// A plain HTTP/1.1 request; returns the status and the body.
-    fn request(&self, method: &str, target: &str, body: &str) -> (u16, String) {
-        let mut s = TcpStream::connect(self.addr()).unwrap();
-        write!(
-            s,
-            "{method} {target} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
-            self.addr(),
-            body.len()
-        )
-        .unwrap();
-        let mut reply = Vec::new();
-        s.read_to_end(&mut reply).unwrap();
-        let reply = String::from_utf8_lossy(&reply).to_string();
-        let status = reply.split(' ').nth(1).unwrap().parse().unwrap();
-        let body = reply.split("\r\n\r\n").nth(1).unwrap_or("").to_string();
-        (status, body)
-    }
-
-    fn get(&self, path: &str) -> (u16, String) {
-        let sep = if path.contains('?') { '&' } else { '?' };
-        self.request("GET", &format!("{path}{sep}token={}", self.token()), "")
-    }
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn node_modules() -> String {
-    common::tool_output("tools/review/setup_puppeteer.sh", &[])
-}
-
 /// angles.csv as `column -> cells` (cells as written: 6 decimals, empty when undefined).
-/// Runs `tests/review/SCRIPT` in node with `args`: it drives Debian's Chromium over the
-/// DevTools protocol and must succeed.
-fn in_browser(script: &str, args: &[&std::ffi::OsStr]) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/review")
-        .join(script);
-    let mut node = Command::new("node");
-    node.arg(path).args(args).env("NODE_PATH", node_modules());
-    if let Some(b) = gait_report::pdf::find_chromium() {
-        node.env("CHROMIUM", b);
-    }
-    let out = node.output().expect("node runs");
-    assert!(
-        out.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
 fn angles_csv(path: &Path) -> Vec<(String, Vec<String>)> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
