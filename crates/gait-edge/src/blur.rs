@@ -103,7 +103,7 @@ fn total(re: f32) -> f32 {
 }
 
 /// The luma (BT.601) of `r`, row by row.
-fn grey(image: &RgbImage, r: Region) -> Vec<f32> {
+pub(crate) fn grey(image: &RgbImage, r: Region) -> Vec<f32> {
     let (w, raw) = (image.width() as usize, image.as_raw());
     let mut out = Vec::with_capacity(((r.x1 - r.x0) * (r.y1 - r.y0)) as usize);
     for y in r.y0 as usize..r.y1 as usize {

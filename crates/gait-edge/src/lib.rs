@@ -4,6 +4,7 @@
 mod blur;
 mod canny;
 mod canny_detector;
+mod edge_contrast;
 mod hed;
 mod hed_candle;
 mod hed_fuse;
@@ -21,6 +22,7 @@ use serde::{Deserialize, Serialize};
 pub use blur::{Region, blur_px};
 pub use canny::{Canny, CannyParams, edge_f1};
 pub use canny_detector::{CannyConfig, CannyDetector};
+pub use edge_contrast::edge_contrast;
 pub use hed::{CandleHedNet, HedConfig, HedDetector, HedError, HedNetwork, OrtHedNet};
 pub use hed_fuse::{SideOutput, fuse};
 pub use person_mask::{MaskKind, MaskSettings, PersonMask, SELFIE_MODEL};

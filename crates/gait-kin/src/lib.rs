@@ -65,7 +65,9 @@ use serde::Serialize;
 pub use angles::Angles;
 pub use bouts::Bout;
 pub use collapse::CollapseRule;
-pub use config::{Amputation, FilterKind, GapFillKind, KinematicsConfig, PostprocessConfig, Side};
+pub use config::{
+    Amputation, FeetContrast, FilterKind, GapFillKind, KinematicsConfig, PostprocessConfig, Side,
+};
 pub use corrections::{
     Corrections, CorrectionsSummary, EventAction, EventEdit, FrameRange, KeypointEdit,
 };
@@ -303,6 +305,7 @@ fn run_chain(
     quality::warn::small_subject(t, kin, &mut warnings);
     let cycle_quality = quality::assess(&evidence, &strides, kin);
     quality::warn::blurred(&cycle_quality, kin, &mut warnings);
+    quality::warn::motion_blurred(&cycle_quality, kin, &mut warnings);
     warnings.extend(quality::warn::per_reason(&cycle_quality, kin));
     let (cycles_accepted, cycles_rejected) = quality::counts(&cycle_quality);
     let accepted = quality::accepted(&cycle_quality);

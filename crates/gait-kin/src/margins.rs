@@ -76,6 +76,10 @@ pub fn cycles(q: &[CycleQuality], kin: &KinematicsConfig) -> Vec<CycleMargin> {
                 ),
                 ("small_subject", kin.cycle_min_leg_px / c.leg_px),
                 ("blurred", c.blur_px / (kin.cycle_max_blur_share * c.leg_px)),
+                (
+                    "motion_blurred",
+                    kin.cycle_min_swing_contrast / c.swing_contrast,
+                ),
             ];
             checks
                 .into_iter()
@@ -124,6 +128,7 @@ mod tests {
             swapped_frames: 0,
             unsure_frames: 0,
             blur_px: f64::NAN,
+            swing_contrast: f64::NAN,
             bout: Some(0),
             at: None,
         };

@@ -124,6 +124,7 @@ fn cycle_quality(r: &KinResult) -> Table {
         .with("shank_ratio", nums(q.iter().map(|q| q.shank_ratio)))
         .with("leg_px", nums(q.iter().map(|q| q.leg_px)))
         .with("blur_px", nums(q.iter().map(|q| q.blur_px)))
+        .with("swing_contrast", nums(q.iter().map(|q| q.swing_contrast)))
         .with("swapped_frames", ints(q.iter().map(|q| q.swapped_frames)))
         .with("unsure_frames", ints(q.iter().map(|q| q.unsure_frames)))
         .with(

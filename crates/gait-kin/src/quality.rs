@@ -15,6 +15,7 @@ use crate::config::{KinematicsConfig, Side};
 use crate::corrections::FrameRange;
 use crate::cycles::Stride;
 use crate::tracks::{LEG, Tracks, dist, median};
+use swing_contrast::swing_contrast;
 
 /// Why a stride was rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -41,9 +42,12 @@ pub enum Reason {
     FarSide,
     /// The legs' image blur over `cycle_max_blur_share` of the leg: the walker too blurred.
     Blurred,
+    /// The foot, swinging, keeps less than `cycle_min_swing_contrast` of its outline's
+    /// contrast standing: smeared by a long exposure.
+    MotionBlurred,
 }
 
-pub const REASONS: [Reason; 10] = [
+pub const REASONS: [Reason; 11] = [
     Reason::StrideTime,
     Reason::FilledGap,
     Reason::LowLikelihood,
@@ -54,6 +58,7 @@ pub const REASONS: [Reason; 10] = [
     Reason::SmallSubject,
     Reason::FarSide,
     Reason::Blurred,
+    Reason::MotionBlurred,
 ];
 
 impl Reason {
@@ -69,6 +74,7 @@ impl Reason {
             Reason::SmallSubject => "small_subject",
             Reason::FarSide => "far_side",
             Reason::Blurred => "blurred",
+            Reason::MotionBlurred => "motion_blurred",
         }
     }
 
@@ -101,6 +107,10 @@ impl Reason {
                 "the legs' image blurred over {:.1} % of the leg length: too blurred for reliable keypoints; film in focus, in more light or with a shorter exposure",
                 100.0 * kin.cycle_max_blur_share
             ),
+            Reason::MotionBlurred => format!(
+                "the swinging foot's outline under {:.0} % of its contrast standing: smeared by a long exposure; film in more light or with a faster shutter (1/250 s or shorter)",
+                100.0 * kin.cycle_min_swing_contrast
+            ),
             Reason::FarSide => "the leg far from the camera (half hidden) in this walk; the same leg's strides near the camera in the walk the other way are used".into(),
         }
     }
@@ -132,6 +142,9 @@ pub struct CycleQuality {
     /// Median blur of the legs' image over the frames measured in the stride (px; NaN when
     /// none was measured), judged against `cycle_max_blur_share` of `leg_px`.
     pub blur_px: f64,
+    /// The foot's outline contrast swinging fast over standing (NaN when not measured), judged
+    /// against `cycle_min_swing_contrast`.
+    pub swing_contrast: f64,
     /// Frames inside the stride whose leg labels the swap correction exchanged.
     pub swapped_frames: usize,
     /// Frames inside the stride whose leg labels are in doubt (judged by
@@ -283,6 +296,7 @@ pub fn assess(ev: &Evidence, strides: &[Stride], kin: &KinematicsConfig) -> Vec<
             let reference = bout.map_or(whole, |b| per_bout[b]);
             let mut q = measure(ev, s, reference, med);
             q.blur_px = stride_blur(kin, s);
+            q.swing_contrast = swing_contrast(ev.clean, kin, ev.size.is_some(), s);
             q.bout = bout;
             q.reasons = verdict(&q, kin, ev.enforce_bouts);
             if excluded(ev, s) {
@@ -368,6 +382,7 @@ fn measure(ev: &Evidence, s: &Stride, reference: [f64; 2], median_s: f64) -> Cyc
         shank_ratio: own[1] / reference[1],
         leg_px: px[0] + px[1],
         blur_px: f64::NAN,
+        swing_contrast: f64::NAN,
         swapped_frames: ev.swapped[a..=b].iter().filter(|&&x| x).count(),
         unsure_frames: ev.unsure[a..=b].iter().filter(|&&x| x).count(),
         bout: None,
@@ -383,6 +398,8 @@ fn verdict(q: &CycleQuality, kin: &KinematicsConfig, enforce_bouts: bool) -> Vec
     // A hair of slack so that a deviation of exactly the limit (e.g. 3 of 30 frames
     // at 0.1 s) is not rejected by rounding.
     let eps = 1e-9;
+    let defocused =
+        kin.cycle_max_blur_share > 0.0 && q.blur_px > kin.cycle_max_blur_share * q.leg_px;
     [
         (
             Reason::StrideTime,
@@ -407,9 +424,12 @@ fn verdict(q: &CycleQuality, kin: &KinematicsConfig, enforce_bouts: bool) -> Vec
         ),
         (Reason::CrossesBout, enforce_bouts && q.bout.is_none()),
         (Reason::SmallSubject, q.leg_px < kin.cycle_min_leg_px),
+        (Reason::Blurred, defocused),
+        // Out of focus, every outline is weak and the ratio says little: the defocus is
+        // the reason.
         (
-            Reason::Blurred,
-            kin.cycle_max_blur_share > 0.0 && q.blur_px > kin.cycle_max_blur_share * q.leg_px,
+            Reason::MotionBlurred,
+            q.swing_contrast < kin.cycle_min_swing_contrast && !defocused,
         ),
     ]
     .into_iter()
@@ -462,6 +482,7 @@ pub fn step_ok(
     around.peek().is_none() || around.any(|c| c.accepted)
 }
 
+mod swing_contrast;
 pub(crate) mod warn;
 
 #[cfg(test)]

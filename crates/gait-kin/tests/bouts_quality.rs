@@ -205,8 +205,8 @@ fn bouts_and_quality_are_written_and_serialised() {
     assert!(
         q.starts_with(
             "side,first_frame,last_frame,accepted,reasons,stride_s,stride_deviation,\
-             max_filled_s,mean_likelihood,thigh_ratio,shank_ratio,leg_px,blur_px,swapped_frames,\
-             unsure_frames,bout\n"
+             max_filled_s,mean_likelihood,thigh_ratio,shank_ratio,leg_px,blur_px,swing_contrast,\
+             swapped_frames,unsure_frames,bout\n"
         ),
         "{q}"
     );

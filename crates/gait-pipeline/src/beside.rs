@@ -21,6 +21,9 @@ pub struct RunBeside {
     /// The blur of the subject's legs per frame measured (`input.blur_px`), which the stride
     /// checks judge (`kinematics.image_blur_px`).
     pub blur_px: Option<BTreeMap<usize, f64>>,
+    /// Each foot's outline contrast per frame (`input.feet_contrast`), which the motion-blur
+    /// check judges (`kinematics.image_feet_contrast`).
+    pub feet_contrast: Option<gait_kin::FeetContrast>,
 }
 
 impl RunBeside {
@@ -53,6 +56,7 @@ impl RunBeside {
                 .filter(|f| f.is_finite() && *f > 0.0),
             frame_size: size("width").zip(size("height")).map(|(w, h)| [w, h]),
             blur_px: json.pointer("/input/blur_px").and_then(blur_table),
+            feet_contrast: json.pointer("/input/feet_contrast").and_then(feet_table),
             manifest,
         }))
     }
@@ -70,6 +74,21 @@ fn blur_table(v: &Value) -> Option<BTreeMap<usize, f64>> {
     )
 }
 
+/// `{"frame": [left, right], ...}` as written by the run (`null` where a foot was not
+/// measured); malformed entries are left out.
+fn feet_table(v: &Value) -> Option<gait_kin::FeetContrast> {
+    let table = v.as_object()?;
+    Some(
+        table
+            .iter()
+            .filter_map(|(k, v)| {
+                let pair = v.as_array().filter(|a| a.len() == 2)?;
+                Some((k.parse().ok()?, [pair[0].as_f64(), pair[1].as_f64()]))
+            })
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -82,13 +101,20 @@ mod tests {
         let manifest = dir.path().join("run.json");
         std::fs::write(
             &manifest,
-            r#"{"input": {"fps": 30.0, "width": 1768, "height": 994, "blur_px": {"60": 1.5, "65": 1.75}}}"#,
+            r#"{"input": {"fps": 30.0, "width": 1768, "height": 994, "blur_px": {"60": 1.5, "65": 1.75}, "feet_contrast": {"60": [25.0, null], "61": [24.5, 12.0], "62": 3}}}"#,
         )
         .unwrap();
         let found = RunBeside::find(&kp).unwrap().unwrap();
         assert_eq!(found.fps, Some(30.0));
         assert_eq!(found.frame_size, Some([1768, 994]));
         assert_eq!(found.blur_px, Some(BTreeMap::from([(60, 1.5), (65, 1.75)])));
+        assert_eq!(
+            found.feet_contrast,
+            Some(BTreeMap::from([
+                (60, [Some(25.0), None]),
+                (61, [Some(24.5), Some(12.0)])
+            ]))
+        );
         std::fs::write(&manifest, "{").unwrap();
         let e = RunBeside::find(&kp).unwrap_err().to_string();
         assert!(e.contains("run.json") && e.contains("not JSON"), "{e}");

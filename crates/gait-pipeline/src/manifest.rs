@@ -121,6 +121,10 @@ pub struct InputRecord {
     /// about six a second (sharpness.rs); the kinematics judge strides by it.
     #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub blur_px: std::collections::BTreeMap<usize, f64>,
+    /// Each foot's outline contrast along the rows (left, right; `gait_edge::edge_contrast`)
+    /// per frame; the kinematics find motion blur by it.
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub feet_contrast: gait_kin::FeetContrast,
 }
 
 #[derive(Debug, Clone, Serialize)]

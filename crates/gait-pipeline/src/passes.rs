@@ -16,6 +16,7 @@ use crate::registry::Stages;
 use crate::selection::{self, SelectionMode, SelectionRecord};
 use crate::sharpness::Sharpness;
 use crate::{PipelineConfig, PipelineError};
+use gait_kin::FeetContrast;
 
 /// What the passes found.
 pub(crate) struct PassOutput {
@@ -31,6 +32,8 @@ pub(crate) struct PassOutput {
     pub(crate) selection: SelectionRecord,
     /// The blur of the subject's legs (px) in the frames measured.
     pub(crate) blur_px: BTreeMap<usize, f64>,
+    /// Each foot's outline contrast per frame.
+    pub(crate) feet_contrast: FeetContrast,
 }
 
 /// Which frames a pass hands on: `regenerate` = through edges and regenerator
@@ -91,9 +94,11 @@ impl Passes<'_> {
                 original: None,
                 selection: SelectionRecord::default(),
                 blur_px: BTreeMap::new(),
+                feet_contrast: BTreeMap::new(),
             }
         };
         out.blur_px = std::mem::take(&mut self.sharpness.blur_px);
+        out.feet_contrast = std::mem::take(&mut self.sharpness.feet_contrast);
         Ok(out)
     }
 
@@ -242,6 +247,7 @@ impl Passes<'_> {
             original: Some(original),
             selection,
             blur_px: BTreeMap::new(),
+            feet_contrast: BTreeMap::new(),
         })
     }
 
@@ -287,6 +293,7 @@ impl Passes<'_> {
             original: Some(original),
             selection: SelectionRecord::default(),
             blur_px: BTreeMap::new(),
+            feet_contrast: BTreeMap::new(),
         })
     }
 }

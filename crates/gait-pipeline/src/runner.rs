@@ -256,6 +256,7 @@ fn run_from(
             last_frame: config.input.last_frame,
             exif_orientation: info.orientations.clone(),
             blur_px: out.blur_px.clone(),
+            feet_contrast: out.feet_contrast.clone(),
         },
         config: serde_json::to_value(config).unwrap_or_default(),
         models: models.all(),
@@ -431,6 +432,7 @@ fn kinematics(
         .frame_size
         .get_or_insert([info.width, info.height]);
     kin_config.image_blur_px = Some(summary.manifest.input.blur_px.clone());
+    kin_config.image_feet_contrast = Some(summary.manifest.input.feet_contrast.clone());
     // A person's corrections saved in the run folder (by `gait review` or by
     // hand) apply to every rerun into that folder unless the config names a file.
     let saved = out.join("corrections.toml");

@@ -24,7 +24,8 @@ pub fn describe(run: &Value) -> Vec<String> {
 
 /// How large and how sharp the subject's legs were in the image of a run (its run.json), over
 /// every stride found, against the limits that reject a stride (`cycle_min_leg_px`,
-/// `cycle_max_blur_share`): a reader sees how far the video was from too small or too blurred.
+/// `cycle_max_blur_share`, `cycle_min_swing_contrast`): a reader sees how far the video was
+/// from too small or too blurred.
 /// `None` without strides.
 pub fn legs_in_image(run: &Value) -> Option<String> {
     let k = run
@@ -64,6 +65,18 @@ fn image(k: &Value, limits: Option<&Value>) -> Option<String> {
             line += &format!("; over {:.1} % a stride is rejected", 100.0 * max);
         }
         line += ")";
+    }
+    if let Some(kept) = median("swing_contrast") {
+        line += &format!(
+            ", and the feet swinging keep {:.0} % of their outline's contrast standing",
+            100.0 * kept
+        );
+        if let Some(min) = limit("cycle_min_swing_contrast").filter(|m| *m > 0.0) {
+            line += &format!(
+                " (under {:.0} %, motion blur, a stride is rejected)",
+                100.0 * min
+            );
+        }
     }
     Some(line + ".")
 }
@@ -210,11 +223,11 @@ mod tests {
             "extra": {"kinematics": {
                 "bouts": [{"first": 55, "last": 185, "direction": "left", "mean_speed": 0.8}],
                 "cycle_quality": [
-                    {"side": "left", "accepted": true, "leg_px": 186.9, "blur_px": 1.66},
-                    {"side": "left", "accepted": false, "leg_px": 192.0, "blur_px": null}
+                    {"side": "left", "accepted": true, "leg_px": 186.9, "blur_px": 1.66, "swing_contrast": 0.91},
+                    {"side": "left", "accepted": false, "leg_px": 192.0, "blur_px": null, "swing_contrast": 0.87}
                 ]
             }},
-            "config": {"kinematics": {"cycle_min_leg_px": 100.0, "cycle_max_blur_share": 0.015}}
+            "config": {"kinematics": {"cycle_min_leg_px": 100.0, "cycle_max_blur_share": 0.015, "cycle_min_swing_contrast": 0.6}}
         });
         let lines = describe(&run);
         assert!(
@@ -230,7 +243,7 @@ mod tests {
         assert!(lines[4].contains("1 accepted, 1 rejected"), "{lines:?}");
         assert_eq!(
             lines[6],
-            "Image: the legs 192 px long (thigh + shank, median over the 2 strides found; a stride under 100 px is rejected), their outline blurred over 1.7 px (0.9 % of the leg; over 1.5 % a stride is rejected)."
+            "Image: the legs 192 px long (thigh + shank, median over the 2 strides found; a stride under 100 px is rejected), their outline blurred over 1.7 px (0.9 % of the leg; over 1.5 % a stride is rejected), and the feet swinging keep 91 % of their outline's contrast standing (under 60 %, motion blur, a stride is rejected)."
         );
         assert!(describe(&serde_json::json!({})).is_empty());
     }

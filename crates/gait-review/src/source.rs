@@ -188,8 +188,9 @@ impl ReviewSource {
         if kin.frame_size.is_none() {
             kin.frame_size = frame_size;
         }
-        kin.image_blur_px =
-            gait_pipeline::RunBeside::find(&dir.join("keypoints.csv"))?.and_then(|b| b.blur_px);
+        let beside = gait_pipeline::RunBeside::find(&dir.join("keypoints.csv"))?;
+        kin.image_blur_px = beside.as_ref().and_then(|b| b.blur_px.clone());
+        kin.image_feet_contrast = beside.and_then(|b| b.feet_contrast);
         let input = video
             .as_ref()
             .ok()
@@ -271,7 +272,8 @@ impl ReviewSource {
         if kin.frame_size.is_none() {
             kin.frame_size = frame_size;
         }
-        kin.image_blur_px = beside.and_then(|b| b.blur_px);
+        kin.image_blur_px = beside.as_ref().and_then(|b| b.blur_px.clone());
+        kin.image_feet_contrast = beside.and_then(|b| b.feet_contrast);
         let size_set = kin.frame_size.map_or(String::new(), |[w, h]| {
             format!(" --set 'kinematics.frame_size=[{w}, {h}]'")
         });

@@ -45,6 +45,7 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
         config.kinematics.frame_size = beside.as_ref().and_then(|b| b.frame_size);
     }
     config.kinematics.image_blur_px = beside.as_ref().and_then(|b| b.blur_px.clone());
+    config.kinematics.image_feet_contrast = beside.as_ref().and_then(|b| b.feet_contrast.clone());
     if let Some(c) = &args.corrections {
         config.kinematics.corrections = Some(c.clone());
     }

@@ -364,3 +364,48 @@ fn a_blurred_walker_is_rejected_by_the_median_blur_of_each_stride() {
             .all(|q| q.blur_px.is_nan() && !q.reasons.contains(&Reason::Blurred))
     );
 }
+
+/// The feet's outline as sharp swinging as standing, but the second stride's foot smeared to
+/// 40 % of its standing contrast: that stride alone is rejected as motion blurred, with a
+/// warning naming the share and frames; without measures, or in a front view, nothing changes.
+#[test]
+fn a_foot_smeared_in_swing_rejects_its_stride() {
+    let c = Case::new();
+    let s = strides();
+    let column = usize::from(s[1].side == Side::Right);
+    let mut feet: crate::config::FeetContrast = (0..180).map(|f| (f, [Some(25.0); 2])).collect();
+    for (_, pair) in feet.range_mut(s[1].start..=s[1].end) {
+        pair[column] = Some(10.0);
+    }
+    let kin = KinematicsConfig {
+        image_feet_contrast: Some(feet),
+        ..KinematicsConfig::default()
+    };
+    let q = c.judge(&s, &kin);
+    let smeared: Vec<bool> = q
+        .iter()
+        .map(|q| q.reasons.contains(&Reason::MotionBlurred))
+        .collect();
+    assert_eq!(smeared, vec![false, true, false, false], "{q:?}");
+    assert!((q[1].swing_contrast - 0.4).abs() < 1e-9, "{q:?}");
+    assert!(
+        [0, 2, 3]
+            .iter()
+            .all(|&k| (q[k].swing_contrast - 1.0).abs() < 1e-9),
+        "{q:?}"
+    );
+    let mut warnings = Vec::new();
+    warn::motion_blurred(&q, &kin, &mut warnings);
+    let range = format!("frames {}-{}", s[1].start, s[1].end);
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].contains("keeps 40 % of its contrast standing") && warnings[0].contains(&range),
+        "{warnings:?}"
+    );
+    let unmeasured = c.judge(&s, &KinematicsConfig::default());
+    assert!(
+        unmeasured
+            .iter()
+            .all(|q| q.swing_contrast.is_nan() && q.accepted)
+    );
+}

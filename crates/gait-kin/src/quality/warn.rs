@@ -1,16 +1,17 @@
 //! The warnings of the stride checks: one per reason that rejected strides, and for a walker
-//! too small or too blurred in the image, the measures behind it.
+//! too small or too blurred in the image (out of focus or smeared by motion), the measures
+//! behind it.
 
 use super::{CycleQuality, REASONS, Reason};
 use crate::config::KinematicsConfig;
 use crate::tracks::{Tracks, median};
 
 /// One warning per reason that rejected a stride (blurred strides have their own, with the
-/// measures: [`blurred`]).
+/// measures: [`blurred`], [`motion_blurred`]).
 pub(crate) fn per_reason(q: &[CycleQuality], kin: &KinematicsConfig) -> Vec<String> {
     REASONS
         .iter()
-        .filter(|&&r| r != Reason::Blurred)
+        .filter(|&&r| r != Reason::Blurred && r != Reason::MotionBlurred)
         .filter_map(|&r| {
             let k = q.iter().filter(|c| c.reasons.contains(&r)).count();
             (k > 0).then(|| {
@@ -46,6 +47,31 @@ pub(crate) fn blurred(q: &[CycleQuality], kin: &KinematicsConfig, warnings: &mut
         100.0 * blur / leg,
         100.0 * kin.cycle_max_blur_share,
         blurred.len()
+    ));
+}
+
+/// Feet smeared by a long exposure: how much of their outline's contrast they keep swinging,
+/// and the strides' frames.
+pub(crate) fn motion_blurred(
+    q: &[CycleQuality],
+    kin: &KinematicsConfig,
+    warnings: &mut Vec<String>,
+) {
+    let smeared: Vec<&CycleQuality> = q
+        .iter()
+        .filter(|c| c.reasons.contains(&Reason::MotionBlurred))
+        .collect();
+    let first = smeared.iter().map(|c| c.first_frame).min();
+    let last = smeared.iter().map(|c| c.last_frame).max();
+    let (Some(a), Some(b)) = (first, last) else {
+        return;
+    };
+    let mut kept: Vec<f64> = smeared.iter().map(|c| c.swing_contrast).collect();
+    warnings.push(format!(
+        "the subject's feet are smeared by motion blur: swinging, their outline keeps {:.0} % of its contrast standing (median over the strides of frames {a}-{b}), under kinematics.cycle_min_swing_contrast = {:.0} %: the exposure is too long for reliable keypoints of a moving foot, so {} strides are rejected (motion_blurred; cycle_quality.csv, swing_contrast); film in more light or with a faster shutter (1/250 s or shorter)",
+        100.0 * median(&mut kept),
+        100.0 * kin.cycle_min_swing_contrast,
+        smeared.len()
     ));
 }
 

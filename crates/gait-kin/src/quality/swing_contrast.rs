@@ -1,0 +1,62 @@
+//! Motion blur of the swinging foot. A long exposure (a phone indoors: up to the whole 1/30 s
+//! frame interval) smears a foot moving at several leg lengths a second over tens of pixels,
+//! and the pose model then draws the swinging foot elsewhere while its likelihoods stay high
+//! (the sample with a 1/30 s shutter: an ankle curve 29 deg RMS off). Defocus and encoding soften
+//! a foot alike standing and swinging; motion blur only swinging. So each stride's foot is
+//! judged by the contrast of its outline while it swings fast against the same foot's while
+//! it stands (`gait_edge::edge_contrast`, measured by `gait run` in every frame).
+
+use crate::config::{KinematicsConfig, Side};
+use crate::cycles::Stride;
+use crate::tracks::{Tracks, median};
+
+/// A foot slower than this (leg lengths per second, the ankle) stands: a planted foot's
+/// keypoint jitters by well under it.
+const STILL: f64 = 0.3;
+/// A foot faster than this swings fast: mid-swing runs at 4-5 leg lengths per second, so
+/// about a third of the swing's frames.
+const FAST: f64 = 2.0;
+/// Fewer frames than this standing (over the whole walk) or swinging fast (in the stride):
+/// no figure.
+const MIN_FRAMES: usize = 3;
+
+/// The stride's foot's median outline contrast while it swings fast over its median contrast
+/// while it stands anywhere in the walk; NaN where not measured (no contrasts, too few frames,
+/// or a front or back view, where the foot moves across the rows little).
+pub(super) fn swing_contrast(t: &Tracks, kin: &KinematicsConfig, frontal: bool, s: &Stride) -> f64 {
+    let Some(contrast) = &kin.image_feet_contrast else {
+        return f64::NAN;
+    };
+    let (Some(ankle), false) = (t.leg_index(s.side, "ankle"), frontal) else {
+        return f64::NAN;
+    };
+    let leg = t.leg_length();
+    let column = usize::from(s.side == Side::Right);
+    let speed = |i: usize| -> Option<f64> {
+        let (a, b) = (t.at(ankle, i.checked_sub(1)?)?, t.at(ankle, i + 1)?);
+        Some((b.0 - a.0).hypot(b.1 - a.1) / 2.0 * t.fps / leg)
+    };
+    // (speed, contrast) of every frame of the walk where both are known.
+    let frames: Vec<(usize, f64, f64)> = (0..t.len())
+        .filter_map(|i| {
+            let frame = t.first_frame + i;
+            let c = contrast.get(&frame)?[column]?;
+            Some((frame, speed(i)?, c))
+        })
+        .collect();
+    let mut still: Vec<f64> = frames.iter().filter(|f| f.1 < STILL).map(|f| f.2).collect();
+    let mut fast: Vec<f64> = frames
+        .iter()
+        .filter(|f| (s.start..=s.end).contains(&f.0) && f.1 > FAST)
+        .map(|f| f.2)
+        .collect();
+    if still.len() < MIN_FRAMES || fast.len() < MIN_FRAMES || !leg.is_finite() {
+        return f64::NAN;
+    }
+    let standing = median(&mut still);
+    if standing > 0.0 {
+        median(&mut fast) / standing
+    } else {
+        f64::NAN
+    }
+}
