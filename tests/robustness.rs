@@ -321,23 +321,7 @@ fn a_phone_s_variable_frame_rate_is_resampled_to_the_camera_s_rate() {
 fn a_blurred_walk_is_refused_with_its_measured_blur() {
     let dir = tempfile::tempdir().unwrap();
     let video = dir.path().join("blurred.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-i"])
-        .arg(sample_video())
-        .args([
-            "-an",
-            "-vf",
-            "gblur=sigma=8",
-            "-c:v",
-            "libx264",
-            "-crf",
-            "18",
-        ])
-        .args(["-preset", "veryfast", "-pix_fmt", "yuv420p"])
-        .arg(&video)
-        .status()
-        .expect("ffmpeg");
-    assert!(status.success());
+    filtered_sample("gblur=sigma=8", "18", &video);
     let run = dir.path().join("run");
     let out = run_ok(&mut run_on(&video, &run));
     // The run's last line says why there is no result.
@@ -362,19 +346,35 @@ fn a_blurred_walk_is_refused_with_its_measured_blur() {
         "{table}"
     );
 
-    // The run's keypoints alone judge alike (the measures travel in run.json), and with the
-    // check off the strides come back: the blur alone rejected them.
-    let kin = dir.path().join("kin");
+    // The blur alone rejected them.
+    judged_alike_and_back_without(dir.path(), &run, "kinematics.cycle_max_blur_share=0");
+}
+
+/// The sample through the ffmpeg video filter `filter`, stored as H.264 at `crf` in `dst`.
+fn filtered_sample(filter: &str, crf: &str, dst: &Path) {
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(sample_video())
+        .args(["-an", "-vf", filter, "-c:v", "libx264", "-crf", crf])
+        .args(["-preset", "veryfast", "-pix_fmt", "yuv420p"])
+        .arg(dst)
+        .status()
+        .expect("ffmpeg");
+    assert!(status.success());
+}
+
+/// `gait kin` on `run`'s keypoints judges its strides alike (the image measures travel in
+/// run.json), and with `check_off` set some strides come back.
+fn judged_alike_and_back_without(dir: &Path, run: &Path, check_off: &str) {
+    let table = std::fs::read_to_string(run.join("cycle_quality.csv")).unwrap();
+    let kin = dir.join("kin");
     run_ok(&mut kin_on(run.join("keypoints.csv"), &kin));
     assert_eq!(
         std::fs::read_to_string(kin.join("cycle_quality.csv")).unwrap(),
         table
     );
-    let off = dir.path().join("off");
-    run_ok(
-        kin_on(run.join("keypoints.csv"), &off)
-            .args(["--set", "kinematics.cycle_max_blur_share=0"]),
-    );
+    let off = dir.join("off");
+    run_ok(kin_on(run.join("keypoints.csv"), &off).args(["--set", check_off]));
     assert!(!accepted(&off).is_empty());
 }
 
@@ -389,15 +389,7 @@ fn a_long_exposure_s_motion_blur_is_named_and_its_strides_rejected() {
     let video = dir.path().join("exposed.mp4");
     let filter = "trim=start_frame=45:end_frame=200,setpts=PTS-STARTPTS,scale=1280:-2,\
                   minterpolate=fps=120,tmix=frames=4,fps=30";
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-i"])
-        .arg(sample_video())
-        .args(["-an", "-vf", filter, "-c:v", "libx264", "-crf", "23"])
-        .args(["-preset", "veryfast", "-pix_fmt", "yuv420p"])
-        .arg(&video)
-        .status()
-        .expect("ffmpeg");
-    assert!(status.success());
+    filtered_sample(filter, "23", &video);
     let run = dir.path().join("run");
     let out = run_ok(&mut run_on(&video, &run));
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -413,19 +405,5 @@ fn a_long_exposure_s_motion_blur_is_named_and_its_strides_rejected() {
     assert!(smeared >= 3 && smeared * 2 > kept.len(), "{kept:?}");
     assert!(accepted(&run).is_empty(), "{:?}", accepted(&run));
 
-    // `gait kin` on the run's keypoints judges alike (the measures travel in run.json), and
-    // with the check off the smeared strides come back.
-    let table = std::fs::read_to_string(run.join("cycle_quality.csv")).unwrap();
-    let kin = dir.path().join("kin");
-    run_ok(&mut kin_on(run.join("keypoints.csv"), &kin));
-    assert_eq!(
-        std::fs::read_to_string(kin.join("cycle_quality.csv")).unwrap(),
-        table
-    );
-    let off = dir.path().join("off");
-    run_ok(
-        kin_on(run.join("keypoints.csv"), &off)
-            .args(["--set", "kinematics.cycle_min_swing_contrast=0"]),
-    );
-    assert!(!accepted(&off).is_empty());
+    judged_alike_and_back_without(dir.path(), &run, "kinematics.cycle_min_swing_contrast=0");
 }

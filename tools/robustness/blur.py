@@ -7,7 +7,6 @@ cycle's curves against the original's same cycle (RMS per joint, deg). BENCHMARK
 
 usage: blur.py --gait target/debug/gait [--input VIDEO] [--work target/robustness/blur]
 """
-import argparse
 import csv
 import math
 import pathlib
@@ -15,7 +14,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from matrix import ROOT, run  # noqa: E402
+from matrix import copies_args, run  # noqa: E402
 
 SIGMAS = [2, 4, 8]
 
@@ -67,15 +66,7 @@ def report(name, folder, ref):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--gait", required=True)
-    ap.add_argument("--input", default=str(ROOT / "data/sample/sports2d-demo.mp4"))
-    ap.add_argument("--work", default=str(ROOT / "target/robustness/blur"))
-    a = ap.parse_args()
-    gait = pathlib.Path(a.gait).resolve()
-    work = pathlib.Path(a.work).resolve()
-    work.mkdir(parents=True, exist_ok=True)
-    original = pathlib.Path(a.input).resolve()
+    gait, work, original = copies_args(__doc__, "target/robustness/blur")
     run(gait, original, work / "original")
     ref = curves(work / "original")
     report("original", work / "original", ref)

@@ -38,6 +38,19 @@ FAST = ["--set", "report.overlay=false", "--set", "report.pdf=false", "--set", "
 SETTINGS = []
 
 
+def copies_args(doc, work):
+    """The command line of the scripts that run copies of one video (blur.py, motion_blur.py):
+    (gait binary, work folder made, input video), resolved."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--gait", required=True)
+    ap.add_argument("--input", default=str(ROOT / "data/sample/sports2d-demo.mp4"))
+    ap.add_argument("--work", default=str(ROOT / work))
+    a = ap.parse_args()
+    folder = pathlib.Path(a.work).resolve()
+    folder.mkdir(parents=True, exist_ok=True)
+    return pathlib.Path(a.gait).resolve(), folder, pathlib.Path(a.input).resolve()
+
+
 def run(gait, video, out, extra=()):
     """`gait run` into `out`; stderr lines returned. A folder of an earlier call keeps its cache,
     so only the stages whose inputs changed run again (the kinematics always do)."""

@@ -12,7 +12,6 @@ BENCHMARKS.md, "Motion blur of a long exposure".
 usage: motion_blur.py --gait target/debug/gait [--input VIDEO] [--work target/robustness/motion]
 The 120 fps interpolation takes about 5 minutes a copy on one core; copies are kept in --work.
 """
-import argparse
 import csv
 import math
 import pathlib
@@ -20,7 +19,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from matrix import ROOT, run  # noqa: E402
+from matrix import ROOT, copies_args, run  # noqa: E402
 
 COPIES = {
     "shutter30_crf12": ("minterpolate=fps=120,tmix=frames=4,fps=30", "12"),
@@ -92,15 +91,7 @@ def matrix_copies():
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--gait", required=True)
-    ap.add_argument("--input", default=str(ROOT / "data/sample/sports2d-demo.mp4"))
-    ap.add_argument("--work", default=str(ROOT / "target/robustness/motion"))
-    a = ap.parse_args()
-    gait = pathlib.Path(a.gait).resolve()
-    work = pathlib.Path(a.work).resolve()
-    work.mkdir(parents=True, exist_ok=True)
-    original = pathlib.Path(a.input).resolve()
+    gait, work, original = copies_args(__doc__, "target/robustness/motion")
     run(gait, original, work / "original")
     ref = mean_curves(work / "original")
     report("original", work / "original", work / "original", ref)

@@ -26,15 +26,17 @@ pub(crate) fn per_reason(q: &[CycleQuality], kin: &KinematicsConfig) -> Vec<Stri
         .collect()
 }
 
+/// The strides rejected for `reason`, with the first and last frame they span; `None` without.
+fn rejected_for(q: &[CycleQuality], reason: Reason) -> Option<(Vec<&CycleQuality>, usize, usize)> {
+    let rejected: Vec<&CycleQuality> = q.iter().filter(|c| c.reasons.contains(&reason)).collect();
+    let first = rejected.iter().map(|c| c.first_frame).min()?;
+    let last = rejected.iter().map(|c| c.last_frame).max()?;
+    Some((rejected, first, last))
+}
+
 /// A walker too blurred for the pose model: the measured blur, the leg and the strides' frames.
 pub(crate) fn blurred(q: &[CycleQuality], kin: &KinematicsConfig, warnings: &mut Vec<String>) {
-    let blurred: Vec<&CycleQuality> = q
-        .iter()
-        .filter(|c| c.reasons.contains(&Reason::Blurred))
-        .collect();
-    let first = blurred.iter().map(|c| c.first_frame).min();
-    let last = blurred.iter().map(|c| c.last_frame).max();
-    let (Some(a), Some(b)) = (first, last) else {
+    let Some((blurred, a, b)) = rejected_for(q, Reason::Blurred) else {
         return;
     };
     let mut blur: Vec<f64> = blurred.iter().map(|c| c.blur_px).collect();
@@ -57,13 +59,7 @@ pub(crate) fn motion_blurred(
     kin: &KinematicsConfig,
     warnings: &mut Vec<String>,
 ) {
-    let smeared: Vec<&CycleQuality> = q
-        .iter()
-        .filter(|c| c.reasons.contains(&Reason::MotionBlurred))
-        .collect();
-    let first = smeared.iter().map(|c| c.first_frame).min();
-    let last = smeared.iter().map(|c| c.last_frame).max();
-    let (Some(a), Some(b)) = (first, last) else {
+    let Some((smeared, a, b)) = rejected_for(q, Reason::MotionBlurred) else {
         return;
     };
     let mut kept: Vec<f64> = smeared.iter().map(|c| c.swing_contrast).collect();
