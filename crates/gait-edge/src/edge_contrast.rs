@@ -2,8 +2,8 @@
 //! the horizontal luma gradient. Motion blur smears a foot along its path (in a side view,
 //! along the rows), so a foot's outline swinging loses this contrast against the same foot
 //! standing, while defocus and encoding change both alike. The sample's feet swinging keep
-//! 0.89-1.07 of their standing contrast in every copy of the robustness matrix; with a 1/30 s
-//! shutter 0.52 (BENCHMARKS.md, "Motion blur").
+//! 0.74-1.23 of their standing contrast per stride in every copy of the robustness matrix; with
+//! a 1/30 s shutter 0.41-0.56 (BENCHMARKS.md, "Motion blur of a long exposure").
 
 use image::RgbImage;
 

@@ -247,9 +247,9 @@ pub struct KinematicsConfig {
     /// A stride whose foot, swinging, keeps less than this share of the contrast its outline
     /// has standing (`swing_contrast`) is rejected (`motion_blurred`): the exposure was long
     /// enough to smear the swinging foot, and the pose model draws it elsewhere. The sample with
-    /// a 1/30 s shutter reads 0.40-0.52 per stride (stored at CRF 23: mean curves 7.8 deg RMS off,
-    /// worst joint 13), with a 1/60 s shutter 0.60-0.76 (3.9 deg, as the matrix's sensor noise),
-    /// every copy of the robustness matrix 0.76-1.10. Side views only. 0 turns the check off.
+    /// a 1/30 s shutter reads 0.41-0.56 per stride (stored at CRF 23: mean curves 5.6 deg RMS off,
+    /// 8.3 at the worst joint), with a 1/60 s shutter 0.60-0.76 (3.9 deg, as the matrix's sensor
+    /// noise), every copy of the robustness matrix 0.74-1.23. Side views only. 0 turns the check off.
     pub cycle_min_swing_contrast: f64,
     /// Each foot's outline contrast per frame (`gait run` fills it, `gait kin` reads it from
     /// run.json). Not a setting: `None` leaves strides unjudged by it.

@@ -19,10 +19,15 @@ const FAST: f64 = 2.0;
 /// Fewer frames than this standing (over the whole walk) or swinging fast (in the stride):
 /// no figure.
 const MIN_FRAMES: usize = 3;
+/// A standing foot whose outline is fainter than this (grey levels per pixel) gives no figure:
+/// the ratio of two faint outlines is noise (the sample's feet read about 25 sharp, 11 blurred by
+/// a Gaussian of sigma 2 px, 3.5 by sigma 8).
+const MIN_STANDING: f64 = 5.0;
 
 /// The stride's foot's median outline contrast while it swings fast over its median contrast
 /// while it stands anywhere in the walk; NaN where not measured (no contrasts, too few frames,
-/// or a front or back view, where the foot moves across the rows little).
+/// a standing outline too faint, or a front or back view, where the foot moves across the rows
+/// little).
 pub(super) fn swing_contrast(t: &Tracks, kin: &KinematicsConfig, frontal: bool, s: &Stride) -> f64 {
     let Some(contrast) = &kin.image_feet_contrast else {
         return f64::NAN;
@@ -54,7 +59,7 @@ pub(super) fn swing_contrast(t: &Tracks, kin: &KinematicsConfig, frontal: bool, 
         return f64::NAN;
     }
     let standing = median(&mut still);
-    if standing > 0.0 {
+    if standing >= MIN_STANDING {
         median(&mut fast) / standing
     } else {
         f64::NAN

@@ -408,4 +408,18 @@ fn a_foot_smeared_in_swing_rejects_its_stride() {
             .iter()
             .all(|q| q.swing_contrast.is_nan() && q.accepted)
     );
+    // Outlines too faint to compare (a walker out of focus): no figure, no rejection.
+    let faint = KinematicsConfig {
+        image_feet_contrast: kin.image_feet_contrast.clone().map(|f| {
+            f.into_iter()
+                .map(|(k, p)| (k, p.map(|c| c.map(|c| c / 10.0))))
+                .collect()
+        }),
+        ..KinematicsConfig::default()
+    };
+    assert!(
+        c.judge(&s, &faint)
+            .iter()
+            .all(|q| q.swing_contrast.is_nan() && q.accepted)
+    );
 }
