@@ -15,7 +15,7 @@ use crate::config::{KinematicsConfig, Side};
 use crate::corrections::FrameRange;
 use crate::cycles::Stride;
 use crate::tracks::{LEG, Tracks, dist, median};
-use swing_contrast::swing_contrast;
+use swing_contrast::FeetInMotion;
 
 /// Why a stride was rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -289,6 +289,7 @@ pub fn assess(ev: &Evidence, strides: &[Stride], kin: &KinematicsConfig) -> Vec<
             segments(t, ev.size, &Side::BOTH, a..=(b.last - f0).min(n - 1))
         })
         .collect();
+    let feet = FeetInMotion::measure(t, kin, ev.size.is_some());
     let mut out: Vec<CycleQuality> = strides
         .iter()
         .map(|s| {
@@ -296,7 +297,7 @@ pub fn assess(ev: &Evidence, strides: &[Stride], kin: &KinematicsConfig) -> Vec<
             let reference = bout.map_or(whole, |b| per_bout[b]);
             let mut q = measure(ev, s, reference, med);
             q.blur_px = stride_blur(kin, s);
-            q.swing_contrast = swing_contrast(ev.clean, kin, ev.size.is_some(), s);
+            q.swing_contrast = feet.swing_contrast(s);
             q.bout = bout;
             q.reasons = verdict(&q, kin, ev.enforce_bouts);
             if excluded(ev, s) {

@@ -78,22 +78,14 @@ impl Sharpness {
         }
     }
 
-    /// Each foot's outline contrast in `frame`, where the model has its ankle and heel or toe.
+    /// Each foot's outline contrast in `frame`, where the model has two of its ankle, heel
+    /// and toe.
     fn measure_feet(&mut self, frame: &Frame, pose: &Pose) {
         if frame.index < self.first || self.feet_contrast.contains_key(&frame.index) {
             return;
         }
-        let read = self.feet.clone().map(|foot| {
-            let seen: Vec<(f64, f64)> = likely(pose, &foot).collect();
-            if seen.len() < 2 {
-                return None;
-            }
-            let length = seen
-                .iter()
-                .flat_map(|a| seen.iter().map(move |b| (a.0 - b.0).hypot(a.1 - b.1)))
-                .fold(MIN_FOOT_PX, f64::max);
-            edge_contrast(&frame.image, around(&seen, FOOT_MARGIN * length, frame)?)
-        });
+        let read: [Option<f64>; 2] =
+            std::array::from_fn(|k| foot_contrast(&self.feet[k], frame, pose));
         if read.iter().any(Option::is_some) {
             self.feet_contrast.insert(frame.index, read);
         }
@@ -112,6 +104,20 @@ impl Sharpness {
             });
         around(&seen, MARGIN * (y1 - y0), frame)
     }
+}
+
+/// The outline contrast of the foot whose keypoints are the columns `foot`, in a box round
+/// them grown by [`FOOT_MARGIN`] of the foot's length; `None` with fewer than two seen.
+fn foot_contrast(foot: &[usize], frame: &Frame, pose: &Pose) -> Option<f64> {
+    let seen: Vec<(f64, f64)> = likely(pose, foot).collect();
+    if seen.len() < 2 {
+        return None;
+    }
+    let length = seen
+        .iter()
+        .flat_map(|a| seen.iter().map(move |b| (a.0 - b.0).hypot(a.1 - b.1)))
+        .fold(MIN_FOOT_PX, f64::max);
+    edge_contrast(&frame.image, around(&seen, FOOT_MARGIN * length, frame)?)
 }
 
 /// The keypoints of columns `columns` that are likely and finite.
