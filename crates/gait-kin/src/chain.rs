@@ -57,17 +57,17 @@ pub(crate) fn warn_no_bout(n: usize, bouts: &[Bout], enforce: bool, warnings: &m
 pub(crate) fn events(
     t: &Tracks,
     dirs: &Directions,
-    scale: Option<&frontal::Scale>,
+    frontal: Option<(View, &frontal::Scale)>,
     steps: &Steps,
     kin: &KinematicsConfig,
     bouts: (&[Bout], bool),
     fixes: Option<(&Corrections, &Path)>,
     warnings: &mut Vec<String>,
 ) -> Result<(Vec<Event>, Vec<EventMargin>, bool), KinError> {
-    let (mut found, margins, from_file) = match (&kin.events_csv, scale) {
+    let (mut found, margins, from_file) = match (&kin.events_csv, frontal) {
         (Some(p), _) => (events::read_csv(p)?, Vec::new(), true),
-        (None, Some(scale)) => {
-            let (ev, m) = frontal::events::detect(t, scale, kin.min_stride_s);
+        (None, Some((view, scale))) => {
+            let (ev, m) = frontal::events::detect(t, view, scale, kin.min_stride_s);
             (ev, m, false)
         }
         (None, None) => {

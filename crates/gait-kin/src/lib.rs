@@ -283,7 +283,7 @@ fn run_chain(
     let (events, event_margins, from_file) = chain::events(
         t,
         &dirs,
-        frontal_scale.as_ref(),
+        frontal_scale.as_ref().map(|s| (view.view, s)),
         steps,
         kin,
         (&bouts, enforce_bouts),

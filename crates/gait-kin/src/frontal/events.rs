@@ -8,16 +8,18 @@
 //! a planted heel does not move in the image, whatever the view. So each stride is a peak of
 //! the foot's image speed (in body sizes per second, so it does not grow as the walker comes
 //! nearer), and between two swings the foot stands: the heel strike starts the longest still
-//! run of the heel ([`STOP_HEEL`]), the toe-off ends the toe's. Stenum et al.
-//! (2024) take frontal events from the ankles' vertical image distance; speeds need no
-//! assumption about which way the walker moves.
+//! run of the heel ([`STOP_HEEL`]), the toe-off ends the toe's. Walking away from the camera
+//! the heel comes to rest in the image before it lands, so there each heel strike is then
+//! taken where the feet's vertical image distance peaks near that start ([`lead`]).
 
 use crate::config::Side;
 use crate::events::{Event, EventKeypoints, EventKind};
+use crate::frontal::lead;
 use crate::frontal::scale::Scale;
 use crate::margins::EventMargin;
 use crate::peaks::{Peak, gait_peaks};
 use crate::tracks::Tracks;
+use crate::view::View;
 
 /// A swing is a speed peak of at least this share of the foot's median swing peak (as the side
 /// view's rule, see [`crate::peaks::gait_peaks`]) ...
@@ -36,7 +38,12 @@ const STOP_TOE: f64 = 0.1;
 
 /// The events of both feet, heel strikes from the heel (else the ankle) and toe-offs from the
 /// toe (else the ankle), with the margins of the swing decisions.
-pub fn detect(t: &Tracks, scale: &Scale, min_stride_s: f64) -> (Vec<Event>, Vec<EventMargin>) {
+pub fn detect(
+    t: &Tracks,
+    view: View,
+    scale: &Scale,
+    min_stride_s: f64,
+) -> (Vec<Event>, Vec<EventMargin>) {
     let min_dist = ((0.8 * min_stride_s * t.fps).round() as usize).max(1);
     let mut events = Vec::new();
     let mut margins = Vec::new();
@@ -63,11 +70,30 @@ pub fn detect(t: &Tracks, scale: &Scale, min_stride_s: f64) -> (Vec<Event>, Vec<
                     EventKind::HeelStrike => a,
                     EventKind::ToeOff => b,
                 });
-            events.extend(frames.map(|i| Event::on_frame(side, kind, t.first_frame + i)));
+            events.extend(frames.map(|i| match (kind, view) {
+                (EventKind::HeelStrike, View::Posterior) => receding_heel_strike(t, side, i),
+                _ => Event::on_frame(side, kind, t.first_frame + i),
+            }));
         }
     }
     events.sort_by_key(|e| (e.frame, e.side == Side::Right, e.event));
     (events, margins)
+}
+
+/// A heel strike of a walk away from the camera: where the feet's vertical distance peaks
+/// around `start`, the start of the heel's still run ([`lead`]), else that start.
+fn receding_heel_strike(t: &Tracks, side: Side, start: usize) -> Event {
+    let frames = |s: f64| (s * t.fps).round() as usize;
+    let lo = start.saturating_sub(frames(lead::SEARCH_BEFORE_S));
+    match lead::heel_strike_near(t, side, lo, start + frames(lead::SEARCH_AFTER_S)) {
+        Some(at) => Event {
+            side,
+            event: EventKind::HeelStrike,
+            frame: t.first_frame + at.max(0.0).round() as usize,
+            at: Some(t.first_frame as f64 + at.max(0.0)),
+        },
+        None => Event::on_frame(side, EventKind::HeelStrike, t.first_frame + start),
+    }
 }
 
 /// Image speed of keypoint `j` per frame, in body sizes per second (central differences).

@@ -9,6 +9,7 @@ pub mod bouts;
 pub mod cycles;
 pub mod events;
 pub mod labels;
+mod lead;
 pub mod measures;
 pub mod scale;
 pub mod tables;

@@ -1,0 +1,129 @@
+//! Heel strikes of a walk away from the camera, from when the landing foot is furthest ahead.
+//!
+//! Seen from behind, a foot that moves away rises in the image, and just before heel strike
+//! the landing foot is as far ahead of the other one, which is about to push off, as it gets:
+//! the feet's vertical image distance peaks there (Stenum et al. 2024 take frontal events from
+//! the ankles' vertical distance). A peak is an extremum, so a pose model's jitter spreads it
+//! about its frame instead of dragging it one way, as it drags the end of the heel's movement:
+//! the receding heel hardly moves in the image for 0.1-0.2 s before it lands, and under jitter
+//! that stretch passes for stance ([`super::events`]). The distance also peaks in mid-swing,
+//! where the foot is lifted highest, so the peak taken is the last one before the stance.
+
+use crate::config::Side;
+use crate::tracks::Tracks;
+
+/// The distance peaks this long before the heel strike (s): with the ankle, heel and toe
+/// averaged, 5-9 frames (150 Hz) before the side view's heel strike on the four walks away of
+/// tests/data/frontal (two trials, each foot, motion capture), median 5.5.
+const LEAD_S: f64 = 0.04;
+/// Half-width of the local quadratic fit that smooths the distance before its peak is taken
+/// (s): two frames at 30 fps. At 0.1 s the mid-swing peak and the landing one merge on a
+/// healthy walk (tests/frontal_mocap.rs: 8 of 10 seeds held instead of 10).
+const FIT_S: f64 = 0.067;
+/// Where the peak is looked for around the start of the heel's still run (s): that start is
+/// early under jitter (by up to 0.13 s), never much late.
+pub const SEARCH_BEFORE_S: f64 = 0.1;
+pub const SEARCH_AFTER_S: f64 = 0.3;
+
+/// The time (timeline frames, sub-frame) of the last peak within `[lo, hi]` frames of the
+/// other foot's image height minus `side`'s (ankle, heel and toe averaged, those seen on both
+/// feet), plus [`LEAD_S`]; `None` without a peak inside (an end of the window is no peak).
+pub fn heel_strike_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<f64> {
+    // Each foot point the model gives on both feet; their mean jitters less than one of them.
+    let pairs: Vec<(usize, usize)> = ["ankle", "heel", "toe"]
+        .iter()
+        .filter_map(|p| {
+            Some((
+                t.seen_leg_index(side, p)?,
+                t.seen_leg_index(side.other(), p)?,
+            ))
+        })
+        .collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let gap = |i: usize| {
+        let sum: f64 = pairs
+            .iter()
+            .map(|&(this, other)| match (t.at(this, i), t.at(other, i)) {
+                (Some(a), Some(b)) => b.1 - a.1,
+                _ => f64::NAN,
+            })
+            .sum();
+        sum / pairs.len() as f64
+    };
+    let w = ((FIT_S * t.fps).round() as usize).max(1);
+    let hi = hi.min(t.len().checked_sub(1 + w)?);
+    let lo = lo.max(w);
+    if hi <= lo + 1 {
+        return None;
+    }
+    let smooth: Vec<f64> = (lo..=hi).map(|i| quadratic_at(&gap, i, w)).collect();
+    Some(lo as f64 + last_peak(&smooth)? + LEAD_S * t.fps)
+}
+
+/// The sub-frame index of the last local maximum of `v` (its vertex through the neighbours),
+/// not at either end.
+fn last_peak(v: &[f64]) -> Option<f64> {
+    let k = (1..v.len().checked_sub(1)?)
+        .rev()
+        .find(|&k| v[k] >= v[k - 1] && v[k] >= v[k + 1])?;
+    let (a, b, c) = (v[k - 1], v[k], v[k + 1]);
+    let curve = a - 2.0 * b + c;
+    let shift = if curve < 0.0 {
+        (0.5 * (a - c) / curve).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    };
+    Some(k as f64 + shift)
+}
+
+/// The value at `i` of the least-squares quadratic through `f` over `i - w ..= i + w`
+/// (a Savitzky-Golay smoother); NaN where a value is missing.
+fn quadratic_at(f: &impl Fn(usize) -> f64, i: usize, w: usize) -> f64 {
+    // For a symmetric window the fitted value at the centre weighs each point by
+    // (3m^2 + 3m - 1 - 5k^2), m = w (Savitzky and Golay 1964).
+    let m = w as f64;
+    let mut num = 0.0;
+    let mut den = 0.0;
+    for k in -(w as i64)..=(w as i64) {
+        let v = f((i as i64 + k) as usize);
+        if !v.is_finite() {
+            return f64::NAN;
+        }
+        let weight = 3.0 * m * m + 3.0 * m - 1.0 - 5.0 * (k * k) as f64;
+        num += weight * v;
+        den += weight;
+    }
+    num / den
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The mid-swing peak is higher than the landing one; the landing one is taken, at its
+    /// vertex between frames.
+    #[test]
+    fn the_last_peak_is_taken_between_frames() {
+        let v = [1.0, 5.0, 2.0, 3.0, 3.5, 3.5, 2.0, 1.0];
+        let p = last_peak(&v).unwrap();
+        assert!((p - 4.5).abs() < 1e-9, "{p}");
+        assert_eq!(last_peak(&[1.0, 2.0, 3.0]), None, "an end is no peak");
+        assert_eq!(last_peak(&[]), None);
+    }
+
+    /// The smoother leaves a quadratic as it is and misses no value.
+    #[test]
+    fn the_smoother_keeps_a_quadratic() {
+        let f = |i: usize| {
+            let x = i as f64;
+            2.0 - 0.3 * x + 0.05 * x * x
+        };
+        for i in 3..10 {
+            assert!((quadratic_at(&f, i, 3) - f(i)).abs() < 1e-9);
+        }
+        let gap = |i: usize| if i == 5 { f64::NAN } else { 1.0 };
+        assert!(quadratic_at(&gap, 4, 2).is_nan());
+    }
+}
