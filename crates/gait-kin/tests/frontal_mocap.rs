@@ -5,7 +5,8 @@
 //! width at each annotated heel strike and the circumduction of each stride; gait-kin sees only
 //! the perspective image and must come close:
 //! - trunk lean and pelvic obliquity within 1.5 deg MAE, hip adduction within 3 deg;
-//! - step width within 2 cm of the heels' 3-D distance;
+//! - step width within 2 cm of the heels' 3-D distance, circumduction within 2 cm of the
+//!   ankle's 3-D excursion (3 cm under the measured jitter);
 //! - heel strikes within 5 frames (150 Hz: one frame of a 30 fps video) of the annotated ones,
 //!   where the annotation marks the contact (see below), and of the side view's heel strikes
 //!   on the same trial (tests/data/fukuchi2018, tests/data/gaitkit_pd), none missed;
@@ -232,6 +233,33 @@ fn step_width_errors(case: &Case, r: &KinResult) -> Vec<f64> {
     errs
 }
 
+/// Circumduction of each accepted stride against the 3-D excursion of the annotated stride of
+/// the same foot that starts nearest (within `window` frames of the run's frame rate).
+fn circumduction_errors(case: &Case, r: &KinResult, per_frame: f64) -> Vec<f64> {
+    let (_, rows) = case.rows("circumduction.csv");
+    let f = r.frontal.as_ref().expect("frontal");
+    let mut errs = Vec::new();
+    for c in f.feet.iter().filter(|l| l.measure == "circumduction") {
+        let start = c.first_frame as f64 * per_frame;
+        let near = rows
+            .iter()
+            .filter(|row| row[0] == c.side.name())
+            .map(|row| {
+                (
+                    row[1].parse::<f64>().unwrap(),
+                    row[3].parse::<f64>().unwrap(),
+                )
+            })
+            .filter(|(fr, _)| (fr - start).abs() <= 3.0 * HS_FRAMES as f64)
+            .min_by(|a, b| (a.0 - start).abs().total_cmp(&(b.0 - start).abs()));
+        if let Some((_, cm)) = near {
+            assert_eq!(c.unit, "cm");
+            errs.push(c.value - cm);
+        }
+    }
+    errs
+}
+
 #[test]
 fn frontal_views_of_real_mocap_match_the_3d_measures() {
     for trial in TRIALS {
@@ -248,6 +276,7 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
             let hs = heel_strike_errors(trial, &case, &r);
             let side_view = against_side_view(trial, &r);
             let widths = step_width_errors(&case, &r);
+            let circ = circumduction_errors(&case, &r, 1.0);
             let mut maes = Vec::new();
             for side in Side::BOTH {
                 for (k, column, limit) in [
@@ -269,12 +298,15 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
                 }
             }
             println!(
-                "{name}: view {:?} ({}); cycles accepted {:?}; heel strikes against the annotations (side, frame, error, ok) {hs:?}; against the side view {side_view:?}; step width errors (cm) {:?}; MAE {:?}",
+                "{name}: view {:?} ({}); cycles accepted {:?}; heel strikes against the annotations (side, frame, error, ok) {hs:?}; against the side view {side_view:?}; step width errors (cm) {:?}; circumduction errors (cm) {:?}; MAE {:?}",
                 r.view.view,
                 r.view.how,
                 r.cycles_accepted,
                 widths
                     .iter()
+                    .map(|e| (e * 10.0).round() / 10.0)
+                    .collect::<Vec<_>>(),
+                circ.iter()
                     .map(|e| (e * 10.0).round() / 10.0)
                     .collect::<Vec<_>>(),
                 maes.iter()
@@ -287,6 +319,10 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
                 "{name}: against the side view {side_view:?}"
             );
             assert!(!widths.is_empty(), "{name}: no step width compared");
+            assert!(
+                !circ.is_empty() && circ.iter().all(|e| e.abs() <= 2.0),
+                "{name}: circumduction errors {circ:?}"
+            );
             assert!(
                 widths.iter().all(|e| e.abs() <= 2.0),
                 "{name}: step widths {widths:?}"
@@ -315,6 +351,7 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
 #[test]
 fn frontal_figures_hold_under_pose_model_noise() {
     let mut summary = Vec::new();
+    let mut worst_circumduction = 0.0f64;
     for trial in TRIALS {
         let side_view = Case::at(
             PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -364,6 +401,11 @@ fn frontal_figures_hold_under_pose_model_noise() {
                         }
                     }
                     let maes = noisy_maes(&case, &r);
+                    let circ = circumduction_errors(&case, &r, 5.0);
+                    if kind == Jitter::Measured {
+                        worst_circumduction =
+                            circ.iter().fold(worst_circumduction, |w, e| w.max(e.abs()));
+                    }
                     angles_held += usize::from(maes.iter().all(|(_, mae, limit)| mae <= limit));
                     // A side without an accepted cycle has no angles to judge (its MAE is
                     // infinite): counted apart, as a failure of the events, not of the angles.
@@ -400,6 +442,13 @@ fn frontal_figures_hold_under_pose_model_noise() {
             }
         }
     }
+    println!(
+        "SUMMARY circumduction under the measured jitter: at most {worst_circumduction:.2} cm off the 3-D excursion"
+    );
+    assert!(
+        worst_circumduction <= 3.0,
+        "circumduction {worst_circumduction:.2} cm off"
+    );
     for walk in ["fukuchi2018_anterior", "fukuchi2018_posterior"] {
         assert!(
             summary.iter().any(|(name, kind, held, ..)| name == walk

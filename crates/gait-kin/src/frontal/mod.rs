@@ -101,7 +101,7 @@ pub fn measure(
     let in_bout = |frame: usize| bout_of(f.bouts, frame).is_some();
     let mut lengths = feet.step_widths(f.events, &in_bout, kin);
     lengths.extend(feet.heel_offsets(f.events, &in_bout, kin));
-    lengths.extend(feet.circumduction(f.accepted, kin));
+    lengths.extend(feet.circumduction(f.accepted, f.events, kin));
     FrontalResult {
         view: f.view,
         leg_per_size: f.scale.leg_per_size,
