@@ -38,7 +38,7 @@ pub const ABDUCTED: Item = Item {
 pub const CIRCUMDUCTION: Item = Item {
     id: "circumduction",
     name: "Circumduction",
-    measure: "the swing ankle's largest lateral excursion from the line between its heel strikes",
+    measure: "the swing ankle's largest lateral excursion from the line joining where the foot stood before and after the swing",
     unit: "cm",
     view: "front or back",
     amputation: "both",

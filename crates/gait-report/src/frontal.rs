@@ -202,7 +202,7 @@ impl FrontalReport {
         }
         let header = ["Measure", "Side", "Mean", "SD", "n", "Unit"];
         format!(
-            "<h3>Step width and circumduction</h3><p>Step width: the heels' lateral distance at each heel strike of the side; circumduction: the swing ankle's largest lateral excursion from the line between its heel strikes. Normal walking base 5-10 cm (Northwestern University Prosthetic-Orthotic Center); a wider base is the abducted gait of the amputee checklists. {} Lengths in cm when kinematics.subject_height_m is set, else in leg lengths.</p>{}",
+            "<h3>Step width and circumduction</h3><p>Step width: the heels' lateral distance at each heel strike of the side; circumduction: the swing ankle's largest lateral excursion from the line joining where the foot stood before and after the swing. Normal walking base 5-10 cm (Northwestern University Prosthetic-Orthotic Center); a wider base is the abducted gait of the amputee checklists. {} Lengths in cm when kinematics.subject_height_m is set, else in leg lengths.</p>{}",
             escape(&gait_eval::normative_frontal::step_width_note()),
             table(&header.map(String::from), &rows)
         )
