@@ -173,9 +173,14 @@ fn heel_strike_errors(trial: &str, case: &Case, r: &KinResult) -> Vec<(Side, usi
 
 /// Detected - `frame` for the nearest heel strike of `side`.
 fn nearest(r: &KinResult, side: Side, frame: usize) -> Option<i64> {
+    nearest_of(r, side, EventKind::HeelStrike, frame)
+}
+
+/// Detected - `frame` for the nearest `kind` of `side`.
+fn nearest_of(r: &KinResult, side: Side, kind: EventKind, frame: usize) -> Option<i64> {
     r.events
         .iter()
-        .filter(|e| e.side == side && e.event == EventKind::HeelStrike)
+        .filter(|e| e.side == side && e.event == kind)
         .map(|e| e.frame as i64 - frame as i64)
         .min_by_key(|d| d.abs())
 }
@@ -183,6 +188,15 @@ fn nearest(r: &KinResult, side: Side, frame: usize) -> Option<i64> {
 /// The frontal run's heel strikes against the side view's of the same trial (the sagittal
 /// fixture, analysed with the defaults): per side-view heel strike, the nearest frontal one.
 fn against_side_view(trial: &str, r: &KinResult) -> Vec<(Side, usize, i64)> {
+    side_view_events(trial, EventKind::HeelStrike)
+        .into_iter()
+        .map(|(side, frame)| (side, frame, nearest(r, side, frame).unwrap_or(i64::MAX)))
+        .collect()
+}
+
+/// The side view's events of `kind` on the same trial (the sagittal fixture, analysed with the
+/// defaults), at 150 Hz.
+fn side_view_events(trial: &str, kind: EventKind) -> Vec<(Side, usize)> {
     let side_view = Case::at(
         PathBuf::from(env!("CARGO_MANIFEST_DIR"))
             .join("../../tests/data")
@@ -194,15 +208,31 @@ fn against_side_view(trial: &str, r: &KinResult) -> Vec<(Side, usize, i64)> {
         &KinematicsConfig::default(),
     )
     .expect("side view");
-    s.events
-        .iter()
-        .filter(|e| e.event == EventKind::HeelStrike)
-        .map(|e| {
-            (
-                e.side,
-                e.frame,
-                nearest(r, e.side, e.frame).unwrap_or(i64::MAX),
-            )
+    (s.events.iter())
+        .filter(|e| e.event == kind)
+        .map(|e| (e.side, e.frame))
+        .collect()
+}
+
+/// Per side-view toe-off, the nearest frontal toe-off of the same side (`per_frame` trial
+/// frames a run frame), in run frames; side-view toe-offs within `edge` run frames of the run's
+/// ends without a frontal one nearer than `edge` are left out (no swing in view after them).
+fn toe_offs_against_side_view(trial: &str, r: &KinResult, per_frame: f64, edge: i64) -> Vec<i64> {
+    let (first, last) = (
+        r.first_frame as i64,
+        (r.first_frame + r.n_frames) as i64 - 1,
+    );
+    side_view_events(trial, EventKind::ToeOff)
+        .into_iter()
+        .filter_map(|(side, f)| {
+            let at = (f as f64 / per_frame).round() as i64;
+            let d = nearest_of(r, side, EventKind::ToeOff, at.max(0) as usize);
+            let near_end = at < first + edge || at > last - edge;
+            match d {
+                Some(d) if d.abs() < edge => Some(d),
+                _ if near_end => None,
+                _ => Some(i64::MAX),
+            }
         })
         .collect()
 }
@@ -275,6 +305,7 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
             assert_eq!(r.view.view, expected, "{name}: {}", r.view.how);
             let hs = heel_strike_errors(trial, &case, &r);
             let side_view = against_side_view(trial, &r);
+            let toe_offs = toe_offs_against_side_view(trial, &r, 1.0, 30);
             let widths = step_width_errors(&case, &r);
             let circ = circumduction_errors(&case, &r, 1.0);
             let mut maes = Vec::new();
@@ -298,7 +329,7 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
                 }
             }
             println!(
-                "{name}: view {:?} ({}); cycles accepted {:?}; heel strikes against the annotations (side, frame, error, ok) {hs:?}; against the side view {side_view:?}; step width errors (cm) {:?}; circumduction errors (cm) {:?}; MAE {:?}",
+                "{name}: view {:?} ({}); cycles accepted {:?}; heel strikes against the annotations (side, frame, error, ok) {hs:?}; against the side view {side_view:?}; toe-offs against the side view's {toe_offs:?}; step width errors (cm) {:?}; circumduction errors (cm) {:?}; MAE {:?}",
                 r.view.view,
                 r.view.how,
                 r.cycles_accepted,
@@ -317,6 +348,10 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
             assert!(
                 side_view.iter().all(|h| h.2.abs() <= HS_FRAMES),
                 "{name}: against the side view {side_view:?}"
+            );
+            assert!(
+                !toe_offs.is_empty() && toe_offs.iter().all(|d| d.abs() <= HS_FRAMES),
+                "{name}: toe-offs against the side view {toe_offs:?}"
             );
             assert!(!widths.is_empty(), "{name}: no step width compared");
             assert!(
@@ -375,6 +410,8 @@ fn frontal_figures_hold_under_pose_model_noise() {
             for kind in [Jitter::Measured, Jitter::MeasuredLimbs, Jitter::Independent] {
                 let model = format!("{kind:?}").to_lowercase();
                 let (mut held, mut angles_held, mut with_cycles_held, mut lost) = (0, 0, 0, 0);
+                // Toe-offs within one video frame of the side view's, of those found; not found.
+                let mut toe_offs = (0usize, 0usize, 0usize);
                 for seed in 1..=10u64 {
                     let noisy = jitter::as_video(&seq, seed, kind);
                     let r = analyse(&noisy, &PostprocessConfig::default(), &kin).expect("analysis");
@@ -399,6 +436,11 @@ fn frontal_figures_hold_under_pose_model_noise() {
                                 e.frame
                             ));
                         }
+                    }
+                    for d in toe_offs_against_side_view(trial, &r, 5.0, 6) {
+                        toe_offs.0 += usize::from(d.abs() <= 1);
+                        toe_offs.1 += usize::from(d != i64::MAX);
+                        toe_offs.2 += usize::from(d == i64::MAX);
                     }
                     let maes = noisy_maes(&case, &r);
                     let circ = circumduction_errors(&case, &r, 5.0);
@@ -436,9 +478,15 @@ fn frontal_figures_hold_under_pose_model_noise() {
                 println!(
                     "SUMMARY {name} ({model} jitter): the figures held in {held} of 10 seeds, \
                      the angles in {angles_held} (on the sides with cycles: {with_cycles_held}; \
-                     a side without cycles in {lost})"
+                     a side without cycles in {lost}); toe-offs within a video frame of the side \
+                     view's: {} of {} found ({} not found)",
+                    toe_offs.0, toe_offs.1, toe_offs.2
                 );
                 summary.push((name.clone(), kind, held, angles_held, with_cycles_held));
+                if kind == Jitter::Measured {
+                    let share = toe_offs.0 as f64 / toe_offs.1.max(1) as f64;
+                    assert!(share >= 0.8, "{name}: toe-offs within a frame {toe_offs:?}");
+                }
             }
         }
     }

@@ -1,13 +1,16 @@
-//! Heel strikes of a walk away from the camera, from when the landing foot is furthest ahead.
+//! Frontal events from the feet's vertical image distance: heel strikes walking away from the
+//! camera, toe-offs walking toward it.
 //!
-//! Seen from behind, a foot that moves away rises in the image, and just before heel strike
-//! the landing foot is as far ahead of the other one, which is about to push off, as it gets:
-//! the feet's vertical image distance peaks there (Stenum et al. 2024 take frontal events from
-//! the ankles' vertical distance). A peak is an extremum, so a pose model's jitter spreads it
-//! about its frame instead of dragging it one way, as it drags the end of the heel's movement:
-//! the receding heel hardly moves in the image for 0.1-0.2 s before it lands, and under jitter
-//! that stretch passes for stance ([`super::events`]). The distance also peaks in mid-swing,
-//! where the foot is lifted highest, so the peak taken is the last one before the stance.
+//! The other foot's image height minus one foot's rises as that foot gets further from the
+//! camera than the other. Seen from behind, just before heel strike the landing foot is as far
+//! ahead of the other one, which is about to push off, as it gets, and the distance peaks there;
+//! seen from the front, the pushing-off foot is furthest behind the planted one just after toe-off
+//! (Stenum et al. 2024 take frontal events from the ankles' vertical distance). A peak is an
+//! extremum, so a pose model's jitter spreads it about its frame instead of dragging it one way,
+//! as it drags where a foot's image speed stops or starts ([`super::events`]): the receding heel
+//! hardly moves in the image for 0.1-0.2 s before it lands, and under jitter that stretch passes
+//! for stance; the approaching toe's speed rises early or late with the jitter. Each peak's offset
+//! from the event was measured on projected motion capture against the side view's events.
 
 use crate::config::Side;
 use crate::tracks::Tracks;
@@ -16,19 +19,42 @@ use crate::tracks::Tracks;
 /// averaged, 5-9 frames (150 Hz) before the side view's heel strike on the four walks away of
 /// tests/data/frontal (two trials, each foot, motion capture), median 5.5.
 const LEAD_S: f64 = 0.04;
+/// Walking toward the camera, the distance peaks this long after the toe-off (s): 6-10 frames
+/// (150 Hz) after the side view's toe-off on the 12 toe-offs of the two walks toward the camera,
+/// mean 8.
+const TOE_LAG_S: f64 = 0.053;
 /// Half-width of the local quadratic fit that smooths the distance before its peak is taken
 /// (s): two frames at 30 fps. At 0.1 s the mid-swing peak and the landing one merge on a
 /// healthy walk (tests/frontal_mocap.rs: 8 of 10 seeds held instead of 10).
 const FIT_S: f64 = 0.067;
-/// Where the peak is looked for around the start of the heel's still run (s): that start is
-/// early under jitter (by up to 0.13 s), never much late.
+/// Where the heel strike's peak is looked for around the start of the heel's still run (s):
+/// that start is early under jitter (by up to 0.13 s), never much late.
 pub const SEARCH_BEFORE_S: f64 = 0.1;
 pub const SEARCH_AFTER_S: f64 = 0.3;
+/// Where the toe-off's peak is looked for around the end of the toe's still run (s).
+pub const TOE_SEARCH_BEFORE_S: f64 = 0.1;
+pub const TOE_SEARCH_AFTER_S: f64 = 0.2;
 
-/// The time (timeline frames, sub-frame) of the last peak within `[lo, hi]` frames of the
-/// other foot's image height minus `side`'s (ankle, heel and toe averaged, those seen on both
-/// feet), plus [`LEAD_S`]; `None` without a peak inside (an end of the window is no peak).
+/// The heel strike of `side` walking away from the camera (timeline frames, sub-frame): the last
+/// peak of the distance within `[lo, hi]` frames (it also peaks in mid-swing, where the foot is
+/// lifted highest, before the landing one), plus [`LEAD_S`]; `None` without a peak inside (an
+/// end of the window is no peak).
 pub fn heel_strike_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<f64> {
+    let (lo, v) = distance(t, side, lo, hi)?;
+    Some(lo as f64 + last_peak(&v)? + LEAD_S * t.fps)
+}
+
+/// The toe-off of `side` walking toward the camera: the highest peak of the distance within
+/// `[lo, hi]` frames, less [`TOE_LAG_S`].
+pub fn toe_off_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<f64> {
+    let (lo, v) = distance(t, side, lo, hi)?;
+    Some((lo as f64 + highest_peak(&v)? - TOE_LAG_S * t.fps).max(0.0))
+}
+
+/// The other foot's image height minus `side`'s (ankle, heel and toe averaged, those seen on
+/// both feet), smoothed, over `[lo, hi]` clipped to where the smoother reaches: (first frame,
+/// values).
+fn distance(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<(usize, Vec<f64>)> {
     // Each foot point the model gives on both feet; their mean jitters less than one of them.
     let pairs: Vec<(usize, usize)> = ["ankle", "heel", "toe"]
         .iter()
@@ -58,16 +84,29 @@ pub fn heel_strike_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<
     if hi <= lo + 1 {
         return None;
     }
-    let smooth: Vec<f64> = (lo..=hi).map(|i| quadratic_at(&gap, i, w)).collect();
-    Some(lo as f64 + last_peak(&smooth)? + LEAD_S * t.fps)
+    Some((lo, (lo..=hi).map(|i| quadratic_at(&gap, i, w)).collect()))
 }
 
 /// The sub-frame index of the last local maximum of `v` (its vertex through the neighbours),
 /// not at either end.
 fn last_peak(v: &[f64]) -> Option<f64> {
-    let k = (1..v.len().checked_sub(1)?)
-        .rev()
-        .find(|&k| v[k] >= v[k - 1] && v[k] >= v[k + 1])?;
+    let k = peaks(v).next_back()?;
+    Some(vertex(v, k))
+}
+
+/// The sub-frame index of the highest local maximum of `v`, not at either end.
+fn highest_peak(v: &[f64]) -> Option<f64> {
+    let k = peaks(v).max_by(|&a, &b| v[a].total_cmp(&v[b]))?;
+    Some(vertex(v, k))
+}
+
+/// The indices of the local maxima of `v`, ends excluded.
+fn peaks(v: &[f64]) -> impl DoubleEndedIterator<Item = usize> + '_ {
+    (1..v.len().saturating_sub(1)).filter(|&k| v[k] >= v[k - 1] && v[k] >= v[k + 1])
+}
+
+/// `k` moved to the vertex of the parabola through `v[k - 1..=k + 1]` (at most half a frame).
+fn vertex(v: &[f64], k: usize) -> f64 {
     let (a, b, c) = (v[k - 1], v[k], v[k + 1]);
     let curve = a - 2.0 * b + c;
     let shift = if curve < 0.0 {
@@ -75,7 +114,7 @@ fn last_peak(v: &[f64]) -> Option<f64> {
     } else {
         0.0
     };
-    Some(k as f64 + shift)
+    k as f64 + shift
 }
 
 /// The value at `i` of the least-squares quadratic through `f` over `i - w ..= i + w`
@@ -102,14 +141,17 @@ fn quadratic_at(f: &impl Fn(usize) -> f64, i: usize, w: usize) -> f64 {
 mod tests {
     use super::*;
 
-    /// The mid-swing peak is higher than the landing one; the landing one is taken, at its
-    /// vertex between frames.
+    /// The mid-swing peak is higher than the landing one: the last peak is the landing one, at
+    /// its vertex between frames; the highest is the other.
     #[test]
     fn the_last_peak_is_taken_between_frames() {
         let v = [1.0, 5.0, 2.0, 3.0, 3.5, 3.5, 2.0, 1.0];
         let p = last_peak(&v).unwrap();
         assert!((p - 4.5).abs() < 1e-9, "{p}");
         assert_eq!(last_peak(&[1.0, 2.0, 3.0]), None, "an end is no peak");
+        // The highest is the first one, its vertex a fourteenth of a frame after it.
+        let h = highest_peak(&v).unwrap();
+        assert!((h - (1.0 + 1.0 / 14.0)).abs() < 1e-9, "{h}");
         assert_eq!(last_peak(&[]), None);
     }
 
