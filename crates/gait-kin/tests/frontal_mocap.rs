@@ -240,51 +240,51 @@ fn toe_offs_against_side_view(trial: &str, r: &KinResult, per_frame: f64, edge: 
 /// Step width at each detected heel strike against the 3-D width at the nearest annotated
 /// heel strike of the same side (within 5 frames).
 fn step_width_errors(case: &Case, r: &KinResult) -> Vec<f64> {
-    let (_, rows) = case.rows("steps.csv");
-    let f = r.frontal.as_ref().expect("frontal");
-    let mut errs = Vec::new();
-    for w in f.feet.iter().filter(|l| l.measure == "step_width") {
-        let near = rows
-            .iter()
-            .filter(|row| row[0] == w.side.name())
-            .map(|row| {
-                (
-                    row[1].parse::<i64>().unwrap(),
-                    row[2].parse::<f64>().unwrap(),
-                )
-            })
-            .filter(|(fr, _)| (fr - w.first_frame as i64).abs() <= HS_FRAMES)
-            .min_by_key(|(fr, _)| (fr - w.first_frame as i64).abs());
-        if let Some((_, cm)) = near {
-            assert_eq!(w.unit, "cm");
-            errs.push(w.value - cm);
-        }
-    }
-    errs
+    errors_against(case, r, ("steps.csv", 2), "step_width", 1.0, HS_FRAMES)
 }
 
 /// Circumduction of each accepted stride against the 3-D excursion of the annotated stride of
-/// the same foot that starts nearest (within `window` frames of the run's frame rate).
+/// the same foot that starts nearest (within 15 trial frames); a run frame is `per_frame`
+/// trial frames.
 fn circumduction_errors(case: &Case, r: &KinResult, per_frame: f64) -> Vec<f64> {
-    let (_, rows) = case.rows("circumduction.csv");
+    errors_against(
+        case,
+        r,
+        ("circumduction.csv", 3),
+        "circumduction",
+        per_frame,
+        3 * HS_FRAMES,
+    )
+}
+
+/// Each frontal foot length `measure` (in cm) minus the reference of the same side in
+/// `file`'s `column` whose frame (column 1) lies nearest the length's first frame, within
+/// `window` trial frames.
+fn errors_against(
+    case: &Case,
+    r: &KinResult,
+    (file, column): (&str, usize),
+    measure: &str,
+    per_frame: f64,
+    window: i64,
+) -> Vec<f64> {
+    let (_, rows) = case.rows(file);
     let f = r.frontal.as_ref().expect("frontal");
     let mut errs = Vec::new();
-    for c in f.feet.iter().filter(|l| l.measure == "circumduction") {
-        let start = c.first_frame as f64 * per_frame;
-        let near = rows
-            .iter()
-            .filter(|row| row[0] == c.side.name())
+    for l in f.feet.iter().filter(|l| l.measure == measure) {
+        let at = l.first_frame as f64 * per_frame;
+        let off = |fr: f64| (fr - at).abs();
+        let near = (rows.iter())
+            .filter(|row| row[0] == l.side.name())
             .map(|row| {
-                (
-                    row[1].parse::<f64>().unwrap(),
-                    row[3].parse::<f64>().unwrap(),
-                )
+                let value: f64 = row[column].parse().unwrap();
+                (row[1].parse::<f64>().unwrap(), value)
             })
-            .filter(|(fr, _)| (fr - start).abs() <= 3.0 * HS_FRAMES as f64)
-            .min_by(|a, b| (a.0 - start).abs().total_cmp(&(b.0 - start).abs()));
+            .filter(|(fr, _)| off(*fr) <= window as f64)
+            .min_by(|a, b| off(a.0).total_cmp(&off(b.0)));
         if let Some((_, cm)) = near {
-            assert_eq!(c.unit, "cm");
-            errs.push(c.value - cm);
+            assert_eq!(l.unit, "cm");
+            errs.push(l.value - cm);
         }
     }
     errs

@@ -48,7 +48,7 @@ pub fn heel_strike_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<
 /// `[lo, hi]` frames, less [`TOE_LAG_S`].
 pub fn toe_off_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<f64> {
     let (lo, v) = distance(t, side, lo, hi)?;
-    Some((lo as f64 + highest_peak(&v)? - TOE_LAG_S * t.fps).max(0.0))
+    Some(lo as f64 + highest_peak(&v)? - TOE_LAG_S * t.fps)
 }
 
 /// The other foot's image height minus `side`'s (ankle, heel and toe averaged, those seen on
