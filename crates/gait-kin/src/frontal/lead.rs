@@ -1,5 +1,5 @@
 //! Frontal events from the feet's vertical image distance: heel strikes walking away from the
-//! camera, toe-offs walking toward it.
+//! camera, toe-offs walking toward it, and the trough that places heel strikes walking toward it.
 //!
 //! The other foot's image height minus one foot's rises as that foot gets further from the
 //! camera than the other. Seen from behind, just before heel strike the landing foot is as far
@@ -27,10 +27,23 @@ const TOE_LAG_S: f64 = 0.053;
 /// (s): two frames at 30 fps. At 0.1 s the mid-swing peak and the landing one merge on a
 /// healthy walk (tests/frontal_mocap.rs: 8 of 10 seeds held instead of 10).
 const FIT_S: f64 = 0.067;
-/// Where the heel strike's peak is looked for around the start of the heel's still run (s):
-/// that start is early under jitter (by up to 0.13 s), never much late.
-pub const SEARCH_BEFORE_S: f64 = 0.1;
-pub const SEARCH_AFTER_S: f64 = 0.3;
+/// Where the heel strike's peak is looked for around the start of the heel's still run (s).
+/// Under jitter that start moves both ways: a two-frame jitter bump in the settling heel starts
+/// the run late (the Parkinson's walk away: 0.15 s), a heel lowered slowly while it moves away
+/// starts it early (up to 0.37 s). At -0.1 / +0.3 s, 6 of the 14 heel strikes more than a video
+/// frame off in 10 seeds were 4-14 frames off (tests/frontal_mocap.rs); at -0.3 / +0.4, none.
+pub const SEARCH_BEFORE_S: f64 = 0.3;
+pub const SEARCH_AFTER_S: f64 = 0.4;
+/// A peak counts only in the upper half of the distance's range over the search window: the
+/// landing peak and the mid-swing one are the window's highest, while the jitter's wiggles on
+/// the distance's fall through early stance are low (on the Parkinson's walk away, a wiggle at
+/// -10 px was the last peak of a window whose landing peak was +25).
+const UPPER_SHARE: f64 = 0.5;
+/// Where the trough that follows a heel strike walking toward the camera is looked for around
+/// the start of the heel's still run (s): the trough comes 0.18 s (healthy) to 0.24 s
+/// (Parkinson's) after the heel strike, and that start is up to 0.13 s early under jitter.
+pub const TROUGH_SEARCH_BEFORE_S: f64 = 0.2;
+pub const TROUGH_SEARCH_AFTER_S: f64 = 0.5;
 /// Where the toe-off's peak is looked for around the end of the toe's still run (s).
 pub const TOE_SEARCH_BEFORE_S: f64 = 0.1;
 pub const TOE_SEARCH_AFTER_S: f64 = 0.2;
@@ -42,6 +55,17 @@ pub const TOE_SEARCH_AFTER_S: f64 = 0.2;
 pub fn heel_strike_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<f64> {
     let (lo, v) = distance(t, side, lo, hi)?;
     Some(lo as f64 + last_peak(&v)? + LEAD_S * t.fps)
+}
+
+/// Walking toward the camera, the last trough of the distance within `[lo, hi]` frames (in the
+/// lower half of its range), sub-frame: the landing foot is then nearest the camera, lowest in
+/// the image, against the other foot that is about to push off. It follows the heel strike by
+/// the initial double support and a little more, which differs between walkers (0.18 s on the
+/// healthy trial, 0.24 s on the Parkinson's), so [`super::events`] calibrates it per walk.
+pub fn trough_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<f64> {
+    let (lo, v) = distance(t, side, lo, hi)?;
+    let flipped: Vec<f64> = v.iter().map(|x| -x).collect();
+    Some(lo as f64 + last_peak(&flipped)?)
 }
 
 /// The toe-off of `side` walking toward the camera: the highest peak of the distance within
@@ -87,10 +111,14 @@ fn distance(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<(usize, Vec<
     Some((lo, (lo..=hi).map(|i| quadratic_at(&gap, i, w)).collect()))
 }
 
-/// The sub-frame index of the last local maximum of `v` (its vertex through the neighbours),
-/// not at either end.
+/// The sub-frame index of the last local maximum of `v` in the upper half of its range (its
+/// vertex through the neighbours), not at either end.
 fn last_peak(v: &[f64]) -> Option<f64> {
-    let k = peaks(v).next_back()?;
+    let (low, high) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+        (a.min(x), b.max(x))
+    });
+    let floor = low + UPPER_SHARE * (high - low);
+    let k = peaks(v).filter(|&k| v[k] >= floor).next_back()?;
     Some(vertex(v, k))
 }
 
@@ -142,12 +170,14 @@ mod tests {
     use super::*;
 
     /// The mid-swing peak is higher than the landing one: the last peak is the landing one, at
-    /// its vertex between frames; the highest is the other.
+    /// its vertex between frames; the highest is the other. A low wiggle after it is no peak.
     #[test]
     fn the_last_peak_is_taken_between_frames() {
         let v = [1.0, 5.0, 2.0, 3.0, 3.5, 3.5, 2.0, 1.0];
         let p = last_peak(&v).unwrap();
         assert!((p - 4.5).abs() < 1e-9, "{p}");
+        let wiggle = [1.0, 5.0, 2.0, 3.0, 3.5, 3.5, 2.0, 1.0, 1.2, 0.9];
+        assert!((last_peak(&wiggle).unwrap() - 4.5).abs() < 1e-9);
         assert_eq!(last_peak(&[1.0, 2.0, 3.0]), None, "an end is no peak");
         // The highest is the first one, its vertex a fourteenth of a frame after it.
         let h = highest_peak(&v).unwrap();
