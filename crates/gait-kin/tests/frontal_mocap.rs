@@ -488,6 +488,9 @@ fn frontal_figures_hold_under_pose_model_noise() {
                 if kind == Jitter::Measured {
                     let share = toe_offs.0 as f64 / toe_offs.1.max(1) as f64;
                     assert!(share >= 0.8, "{name}: toe-offs within a frame {toe_offs:?}");
+                    // Not found: 0-5 in 10 seeds (the Parkinson's walk toward the camera: 17
+                    // before the toe-off's peak was searched up to 0.5 s after the still run).
+                    assert!(toe_offs.2 <= 6, "{name}: toe-offs not found {toe_offs:?}");
                 }
             }
         }

@@ -123,7 +123,10 @@ fn calibrate_approaching_heel_strikes(t: &Tracks, events: &mut [Event]) {
             Some((k, start as f64, trough))
         })
         .collect();
-    let mut lags: Vec<f64> = found.iter().map(|&(_, start, trough)| trough - start).collect();
+    let mut lags: Vec<f64> = found
+        .iter()
+        .map(|&(_, start, trough)| trough - start)
+        .collect();
     if lags.len() < MIN_CALIBRATION {
         return;
     }
