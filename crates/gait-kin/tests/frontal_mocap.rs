@@ -378,13 +378,11 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
 /// the frontal angles within the targets. Measured (printed as SUMMARY): the angles hold in 39
 /// of 40 seeds (the independent model: 25, the Parkinson's walker's pelvic obliquity about 2
 /// deg, his hip joint centres 14 cm apart); the healthy walk's figures in 10 of 10 seeds each
-/// way (walking away, heel strikes where the feet's vertical distance peaks: before, 1 of 10,
-/// 2-4 frames early; walking toward, at its trough less the walk's lag: before, 9 of 10); the
-/// Parkinson's walker's in 9 of 10 toward the camera (before the trough, 3) and 5 of 10 away
-/// (his shuffling feet's distance peaks flatly; before the wider search, 3, with heel strikes
-/// up to 14 frames off). Asserted: every seed's view decided right, the angles in at least 9 of
-/// 10 seeds of every walk and view, the healthy walk's figures in at least 9 of 10 both ways,
-/// the Parkinson's in 8 toward the camera and 4 away.
+/// way, the Parkinson's walker's in 9 of 10 each way (before the heel strikes were placed from
+/// the feet's vertical distance, calibrated on the walk: 3 of 10 each way, with heel strikes up
+/// to 14 frames off; his shuffling feet's distance peaks flatly). Asserted: every seed's view
+/// decided right, the angles in at least 9 of 10 seeds of every walk and view, the figures of
+/// the healthy walk in at least 9 of 10 and of the Parkinson's in at least 8, both ways.
 #[test]
 fn frontal_figures_hold_under_pose_model_noise() {
     let mut summary = Vec::new();
@@ -506,7 +504,7 @@ fn frontal_figures_hold_under_pose_model_noise() {
         ("fukuchi2018_anterior", 9),
         ("fukuchi2018_posterior", 9),
         ("gaitkit_pd_anterior", 8),
-        ("gaitkit_pd_posterior", 4),
+        ("gaitkit_pd_posterior", 8),
     ] {
         assert!(
             summary.iter().any(|(name, kind, held, ..)| name == walk

@@ -8,20 +8,19 @@
 //! a planted heel does not move in the image, whatever the view. So each stride is a peak of
 //! the foot's image speed (in body sizes per second, so it does not grow as the walker comes
 //! nearer), and between two swings the foot stands: the heel strike starts the longest still
-//! run of the heel ([`STOP_HEEL`]), the toe-off ends the toe's. Walking away from the camera
-//! the heel comes to rest in the image before it lands, so there each heel strike is taken
-//! where the feet's vertical image distance peaks near that start; walking toward it, each
-//! toe-off where that distance peaks near the end of the toe's still run, and each heel strike
-//! at the trough of that distance that follows it, less the walk's own lag between the two
-//! ([`lead`], [`calibrate_approaching_heel_strikes`]).
+//! run of the heel ([`STOP_HEEL`]), the toe-off ends the toe's. Under a pose model's jitter
+//! those starts and ends move by video frames, so the heel strikes are then placed from the
+//! feet's vertical image distance near each start ([`heel_strikes`]), and walking toward the
+//! camera each toe-off where that distance peaks near the end of the toe's still run
+//! ([`lead`]).
 
 use crate::config::Side;
 use crate::events::{Event, EventKeypoints, EventKind};
-use crate::frontal::lead;
 use crate::frontal::scale::Scale;
+use crate::frontal::{heel_strikes, lead};
 use crate::margins::EventMargin;
 use crate::peaks::{Peak, gait_peaks};
-use crate::tracks::{self, Tracks};
+use crate::tracks::Tracks;
 use crate::view::View;
 
 /// A swing is a speed peak of at least this share of the foot's median swing peak (as the side
@@ -81,69 +80,14 @@ pub fn detect(
                     EventKind::ToeOff => b,
                 });
             events.extend(frames.map(|i| match (kind, view) {
-                (EventKind::HeelStrike, View::Posterior) => receding_heel_strike(t, side, i),
                 (EventKind::ToeOff, View::Anterior) => approaching_toe_off(t, side, i),
                 _ => Event::on_frame(side, kind, t.first_frame + i),
             }));
         }
     }
-    if view == View::Anterior {
-        calibrate_approaching_heel_strikes(t, &mut events);
-    }
+    heel_strikes::place(t, view, &mut events);
     events.sort_by_key(|e| (e.frame, e.side == Side::Right, e.event));
     (events, margins)
-}
-
-/// Fewest heel strikes whose lags calibrate the trough: with fewer, the still runs' starts
-/// stay the heel strikes. Both feet's lags are pooled: per foot (3 each on the Parkinson's
-/// walk) the median of so few noisy lags moved more heel strikes than it corrected (held in 6
-/// seeds of 10 instead of 9). A walker whose initial double support differs between the legs
-/// by d has each foot's heel strikes d/2 off, in opposite directions.
-const MIN_CALIBRATION: usize = 3;
-
-/// Walking toward the camera, each heel strike (the start of the heel's still run) moved to the
-/// trough of the feet's vertical distance after it, less the median lag between the two over
-/// the walk ([`lead::trough_near`]). The starts are right on average (clean projections within
-/// 0-4 frames at 150 Hz) but each is moved 2-3 video frames either way by a pose model's jitter;
-/// the trough is an extremum, which jitter spreads but does not drag, at a lag that depends on
-/// the walker's double support. On tests/frontal_mocap.rs (10 seeds, jitter as measured) the
-/// heel strikes more than a video frame off fell from 1 to 0 (healthy) and 9 to 1 (Parkinson's).
-fn calibrate_approaching_heel_strikes(t: &Tracks, events: &mut [Event]) {
-    let frames = |s: f64| (s * t.fps).round() as usize;
-    // (event index, still-run start, trough), both in track frames.
-    let found: Vec<(usize, f64, f64)> = events
-        .iter()
-        .enumerate()
-        .filter(|(_, e)| e.event == EventKind::HeelStrike)
-        .filter_map(|(k, e)| {
-            let start = e.frame - t.first_frame;
-            let lo = start.saturating_sub(frames(lead::TROUGH_SEARCH_BEFORE_S));
-            let hi = start + frames(lead::TROUGH_SEARCH_AFTER_S);
-            let trough = lead::trough_near(t, e.side, lo, hi)?;
-            Some((k, start as f64, trough))
-        })
-        .collect();
-    let mut lags: Vec<f64> = found
-        .iter()
-        .map(|&(_, start, trough)| trough - start)
-        .collect();
-    if lags.len() < MIN_CALIBRATION {
-        return;
-    }
-    let lag = tracks::median(&mut lags);
-    for (k, _, trough) in found {
-        let side = events[k].side;
-        events[k] = placed(t, side, EventKind::HeelStrike, 0, Some(trough - lag));
-    }
-}
-
-/// A heel strike of a walk away from the camera: where the feet's vertical distance peaks
-/// around `start`, the start of the heel's still run ([`lead`]), else that start.
-fn receding_heel_strike(t: &Tracks, side: Side, start: usize) -> Event {
-    let frames = |s: f64| (s * t.fps).round() as usize;
-    let lo = start.saturating_sub(frames(lead::SEARCH_BEFORE_S));
-    let at = lead::heel_strike_near(t, side, lo, start + frames(lead::SEARCH_AFTER_S));
-    placed(t, side, EventKind::HeelStrike, start, at)
 }
 
 /// A toe-off of a walk toward the camera: where the feet's vertical distance peaks around
@@ -156,7 +100,13 @@ fn approaching_toe_off(t: &Tracks, side: Side, end: usize) -> Event {
 }
 
 /// The event at sub-frame `at` (timeline frames) where found, else on frame `fallback`.
-fn placed(t: &Tracks, side: Side, event: EventKind, fallback: usize, at: Option<f64>) -> Event {
+pub(super) fn placed(
+    t: &Tracks,
+    side: Side,
+    event: EventKind,
+    fallback: usize,
+    at: Option<f64>,
+) -> Event {
     match at {
         Some(at) => Event {
             side,

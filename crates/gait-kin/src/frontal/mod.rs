@@ -8,6 +8,7 @@
 pub mod bouts;
 pub mod cycles;
 pub mod events;
+mod heel_strikes;
 pub mod labels;
 mod lead;
 pub mod measures;
