@@ -61,3 +61,96 @@ pub fn place(t: &Tracks, view: View, events: &mut [Event]) {
         events[k] = placed(t, events[k].side, EventKind::HeelStrike, 0, Some(at));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Side;
+
+    /// 30 fps, a stride of 30 frames: the left ankle's image y is 600 + 20 cos, the right's
+    /// 600 - 20 cos, so the left foot's vertical distance (the right's y minus the left's) has
+    /// its troughs at 0, 30, 60, ... and its peaks half a stride later.
+    fn feet() -> Tracks {
+        let n = 160;
+        let wave = |i: usize| 20.0 * (2.0 * std::f64::consts::PI * i as f64 / 30.0).cos();
+        Tracks {
+            fps: 30.0,
+            first_frame: 0,
+            names: vec!["left_ankle".into(), "right_ankle".into()],
+            x: vec![vec![500.0; n], vec![520.0; n]],
+            y: vec![
+                (0..n).map(|i| 600.0 + wave(i)).collect(),
+                (0..n).map(|i| 600.0 - wave(i)).collect(),
+            ],
+            likelihood: vec![vec![1.0; n]; 2],
+        }
+    }
+
+    fn heel_strikes(frames: &[usize]) -> Vec<Event> {
+        frames
+            .iter()
+            .map(|&f| Event::on_frame(Side::Left, EventKind::HeelStrike, f))
+            .collect()
+    }
+
+    fn placed_at(events: &[Event]) -> Vec<f64> {
+        events
+            .iter()
+            .map(|e| e.at.unwrap_or(e.frame as f64))
+            .collect()
+    }
+
+    /// Walking toward the camera: still-run starts 5 frames before the troughs, give or take
+    /// their jitter (+2, -2, 0, +1), all come out at the trough less the median lag (4.5).
+    #[test]
+    fn the_trough_less_the_walks_lag_removes_the_starts_jitter() {
+        let t = feet();
+        let mut events = heel_strikes(&[27, 53, 85, 116]);
+        place(&t, View::Anterior, &mut events);
+        for (at, trough) in placed_at(&events).iter().zip([30.0, 60.0, 90.0, 120.0]) {
+            assert!(
+                (at - (trough - 4.5)).abs() < 0.1,
+                "{at} for the trough at {trough}"
+            );
+        }
+    }
+
+    /// Walking away: whatever the starts' jitter, each heel strike is the landing peak (half a
+    /// stride after a trough) plus 0.04 s, as the distance's fall follows each peak alike; a
+    /// bump before one peak, which moves that peak, does not move its heel strike.
+    #[test]
+    fn the_fall_less_the_walks_lag_lands_on_the_peak() {
+        let mut t = feet();
+        for i in 71..=73 {
+            t.y[0][i] -= 8.0;
+        }
+        let bumped = lead::landing_near(&t, Side::Left, 69, 86).unwrap().peak;
+        assert!(
+            bumped < 74.5,
+            "the bump moves the peak 2 frames early: {bumped}"
+        );
+        let mut events = heel_strikes(&[44, 77, 104, 137]);
+        place(&t, View::Posterior, &mut events);
+        for (at, peak) in placed_at(&events).iter().zip([45.0, 75.0, 105.0, 135.0]) {
+            // The bump shifts its fall's halfway level a little: 0.36 frames.
+            let tolerance = if peak == 75.0 { 0.5 } else { 0.1 };
+            assert!(
+                (at - (peak + 1.2)).abs() < tolerance,
+                "{at} for the peak at {peak}"
+            );
+        }
+    }
+
+    /// With fewer heel strikes than a calibration needs, walking toward the camera keeps the
+    /// still runs' starts; a side view is left alone.
+    #[test]
+    fn too_few_heel_strikes_keep_their_estimates() {
+        let t = feet();
+        let mut events = heel_strikes(&[27, 53]);
+        place(&t, View::Anterior, &mut events);
+        assert_eq!(placed_at(&events), vec![27.0, 53.0]);
+        let mut side = heel_strikes(&[27, 53, 85, 116]);
+        place(&t, View::Sagittal, &mut side);
+        assert_eq!(placed_at(&side), vec![27.0, 53.0, 85.0, 116.0]);
+    }
+}
