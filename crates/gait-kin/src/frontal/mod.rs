@@ -2,7 +2,7 @@
 //! walk toward (anterior) or away from (posterior) the camera. The view is decided in
 //! [`crate::view`]; this module supplies the parts of the chain that differ from a side view:
 //! the leg labels ([`labels`]), the body's scale per frame ([`scale`]), bouts ([`bouts`]),
-//! events ([`events`]) and the measures ([`measures`], [`cycles`]). Quality control and
+//! events ([`events`], heel strikes placed by [`heel_strikes`]) and the measures ([`measures`], [`cycles`]). Quality control and
 //! strides are the side view's, with segment lengths taken in body sizes.
 
 pub mod bouts;
