@@ -10,7 +10,7 @@
 //! nearer), and between two swings the foot stands: the heel strike starts the longest still
 //! run of the heel ([`STOP_HEEL`]), the toe-off ends the toe's. Under a pose model's jitter
 //! those starts and ends move by video frames, so the heel strikes are then placed from the
-//! feet's vertical image distance near each start ([`heel_strikes`]), and walking toward the
+//! feet's vertical image distance near each start (`heel_strikes`), and walking toward the
 //! camera each toe-off where that distance peaks near the end of the toe's still run
 //! ([`lead`]).
 

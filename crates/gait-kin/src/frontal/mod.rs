@@ -2,8 +2,9 @@
 //! walk toward (anterior) or away from (posterior) the camera. The view is decided in
 //! [`crate::view`]; this module supplies the parts of the chain that differ from a side view:
 //! the leg labels ([`labels`]), the body's scale per frame ([`scale`]), bouts ([`bouts`]),
-//! events ([`events`], heel strikes placed by [`heel_strikes`]) and the measures ([`measures`], [`cycles`]). Quality control and
-//! strides are the side view's, with segment lengths taken in body sizes.
+//! events ([`events`], heel strikes placed by `heel_strikes`) and the measures ([`measures`],
+//! [`cycles`]). Quality control and strides are the side view's, with segment lengths taken in
+//! body sizes.
 
 pub mod bouts;
 pub mod cycles;
