@@ -1,5 +1,6 @@
-//! Frontal events from the feet's vertical image distance: heel strikes walking away from the
-//! camera, toe-offs walking toward it, and the trough that places heel strikes walking toward it.
+//! Frontal events from the feet's vertical image distance: the features that place heel strikes
+//! (walking away, the landing peak and the fall after it; walking toward, the trough after
+//! contact) and the toe-offs walking toward the camera.
 //!
 //! The other foot's image height minus one foot's rises as that foot gets further from the
 //! camera than the other. Seen from behind, just before heel strike the landing foot is as far
@@ -72,8 +73,8 @@ pub struct Landing {
 /// and 6 / 3 / 4 with the limbs' larger jitter (tests/frontal_mocap.rs); the healthy walk in 10.
 const FALL_S: f64 = 0.5;
 
-/// The landing of `side` within `[lo, hi]` track frames, `None` without a
-/// peak inside (an end of the window is no peak).
+/// The landing of `side` within `[lo, hi]` track frames, `None` without a peak inside (an end
+/// of the window is no peak).
 pub fn landing_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<Landing> {
     let (lo, v) = distance(t, side, lo, hi)?;
     let peak = lo as f64 + last_peak(&v)?;
@@ -103,7 +104,7 @@ fn halfway_down(v: &[f64]) -> Option<f64> {
 /// lower half of its range), sub-frame: the landing foot is then nearest the camera, lowest in
 /// the image, against the other foot that is about to push off. It follows the heel strike by
 /// the initial double support and a little more, which differs between walkers (0.18 s on the
-/// healthy trial, 0.24 s on the Parkinson's), so [`super::events`] calibrates it per walk.
+/// healthy trial, 0.24 s on the Parkinson's), so the lag is calibrated per walk (`heel_strikes`).
 pub fn trough_near(t: &Tracks, side: Side, lo: usize, hi: usize) -> Option<f64> {
     let (lo, v) = distance(t, side, lo, hi)?;
     let flipped: Vec<f64> = v.iter().map(|x| -x).collect();
