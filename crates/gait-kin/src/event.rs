@@ -45,6 +45,16 @@ impl Event {
         }
     }
 
+    /// An event at sub-frame time `at` (input frames), on its nearest frame.
+    pub fn between_frames(side: Side, event: EventKind, at: f64) -> Self {
+        Self {
+            side,
+            event,
+            frame: at.round() as usize,
+            at: Some(at),
+        }
+    }
+
     /// The event's time in input frames, sub-frame where known.
     pub fn time(&self) -> f64 {
         self.at.unwrap_or(self.frame as f64)

@@ -95,26 +95,11 @@ pub fn detect(
 fn approaching_toe_off(t: &Tracks, side: Side, end: usize) -> Event {
     let frames = |s: f64| (s * t.fps).round() as usize;
     let lo = end.saturating_sub(frames(lead::TOE_SEARCH_BEFORE_S));
-    let at = lead::toe_off_near(t, side, lo, end + frames(lead::TOE_SEARCH_AFTER_S));
-    placed(t, side, EventKind::ToeOff, end, at)
-}
-
-/// The event at sub-frame `at` (timeline frames) where found, else on frame `fallback`.
-pub(super) fn placed(
-    t: &Tracks,
-    side: Side,
-    event: EventKind,
-    fallback: usize,
-    at: Option<f64>,
-) -> Event {
-    match at {
-        Some(at) => Event {
-            side,
-            event,
-            frame: t.first_frame + at.max(0.0).round() as usize,
-            at: Some(t.first_frame as f64 + at.max(0.0)),
-        },
-        None => Event::on_frame(side, event, t.first_frame + fallback),
+    match lead::toe_off_near(t, side, lo, end + frames(lead::TOE_SEARCH_AFTER_S)) {
+        Some(at) => {
+            Event::between_frames(side, EventKind::ToeOff, t.first_frame as f64 + at.max(0.0))
+        }
+        None => Event::on_frame(side, EventKind::ToeOff, t.first_frame + end),
     }
 }
 

@@ -11,7 +11,6 @@
 //! is right on average (walking toward: the still run's start; away: the landing peak).
 
 use crate::events::{Event, EventKind};
-use crate::frontal::events::placed;
 use crate::frontal::lead;
 use crate::tracks::{self, Tracks};
 use crate::view::View;
@@ -58,7 +57,8 @@ pub fn place(t: &Tracks, view: View, events: &mut [Event]) {
             (Some(feature), Some(lag)) => feature - lag,
             _ => estimate,
         };
-        events[k] = placed(t, events[k].side, EventKind::HeelStrike, 0, Some(at));
+        let at = t.first_frame as f64 + at.max(0.0);
+        events[k] = Event::between_frames(events[k].side, EventKind::HeelStrike, at);
     }
 }
 
