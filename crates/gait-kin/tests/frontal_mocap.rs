@@ -382,7 +382,8 @@ fn frontal_views_of_real_mocap_match_the_3d_measures() {
 /// the feet's vertical distance, calibrated on the walk: 3 of 10 each way, with heel strikes up
 /// to 14 frames off; his shuffling feet's distance peaks flatly). Asserted: every seed's view
 /// decided right, the angles in at least 9 of 10 seeds of every walk and view, the figures of
-/// the healthy walk in at least 9 of 10 and of the Parkinson's in at least 8, both ways.
+/// the healthy walk in at least 9 of 10 and of the Parkinson's in at least 8, both ways, and
+/// under every jitter model cycles on both sides.
 #[test]
 fn frontal_figures_hold_under_pose_model_noise() {
     let mut summary = Vec::new();
@@ -483,6 +484,9 @@ fn frontal_figures_hold_under_pose_model_noise() {
                     toe_offs.0, toe_offs.1, toe_offs.2
                 );
                 summary.push((name.clone(), kind, held, angles_held, with_cycles_held));
+                // Before heel strikes that conflict with placed ones were dropped, the
+                // Parkinson's walker's limbs' jitter left a side without cycles in 3 of 20 seeds.
+                assert_eq!(lost, 0, "{name} ({model} jitter): a side without cycles");
                 if kind == Jitter::Measured {
                     let share = toe_offs.0 as f64 / toe_offs.1.max(1) as f64;
                     assert!(share >= 0.8, "{name}: toe-offs within a frame {toe_offs:?}");

@@ -85,7 +85,7 @@ pub fn detect(
             }));
         }
     }
-    heel_strikes::place(t, view, &mut events);
+    heel_strikes::place(t, view, min_stride_s, &mut events);
     events.sort_by_key(|e| (e.frame, e.side == Side::Right, e.event));
     (events, margins)
 }
