@@ -87,6 +87,9 @@ pub fn detect(
     }
     heel_strikes::place(t, view, min_stride_s, &mut events);
     events.sort_by_key(|e| (e.frame, e.side == Side::Right, e.event));
+    // Two toe still runs before one swing can end at the same distance peak (walking toward
+    // the camera): one toe-off.
+    events.dedup_by(|a, b| a.key() == b.key() && (a.time() - b.time()).abs() < 0.5);
     (events, margins)
 }
 
