@@ -56,6 +56,7 @@ pub mod swap;
 mod testing;
 pub mod tracks;
 pub mod view;
+pub mod walk_angle;
 
 use std::path::PathBuf;
 
@@ -403,7 +404,18 @@ fn decide_view(
 ) -> ViewDecision {
     let mut t = Tracks::from_sequence(seq);
     steps.gate.apply(&mut t);
-    view::decide(&t, kin.view, warnings)
+    let mut decision = view::decide(&t, kin.view, warnings);
+    if let Some([width, _]) = kin.frame_size {
+        decision.walk_angle_deg = walk_angle::estimate(&t, width);
+        if decision.walk_angle_deg.is_finite() {
+            decision.how += &format!(
+                "; the walk about {:.0} deg off the camera's axis",
+                decision.walk_angle_deg
+            );
+        }
+        warnings.extend(walk_angle::warning(decision.view, decision.walk_angle_deg));
+    }
+    decision
 }
 
 /// Per-frame direction, with warnings for front views and no direction at all.

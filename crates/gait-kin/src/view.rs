@@ -81,6 +81,9 @@ pub struct ViewDecision {
     /// Body size (mid-hip to mid-shoulder, else hip to ankle) at the end over the start of the
     /// frames where it is seen, from a fit: above 1 the walker comes nearer.
     pub growth: f64,
+    /// Degrees between the walking direction and the camera's axis (0: toward or away, 90:
+    /// across; [`crate::walk_angle`]); NaN when the frame size is not known.
+    pub walk_angle_deg: f64,
 }
 
 /// A walker whose hips lie apart by more than half a thigh faces or backs the camera (as
@@ -120,6 +123,7 @@ pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> 
                 how,
                 frontal_share: share,
                 growth,
+                walk_angle_deg: f64::NAN,
             };
         }
         ViewSetting::Left | ViewSetting::Right => View::Sagittal,
@@ -152,6 +156,7 @@ pub fn decide(t: &Tracks, declared: ViewSetting, warnings: &mut Vec<String>) -> 
         how: format!("declared in kinematics.view ({seen})"),
         frontal_share: share,
         growth,
+        walk_angle_deg: f64::NAN,
     }
 }
 

@@ -17,11 +17,13 @@ pub struct KinSource<'a> {
     pub tool: &'a str,
 }
 
-/// Writes `dir/kin.json` for `source` analysed with `config`.
+/// Writes `dir/kin.json` for `source` analysed with `config`, with the analysis' `warnings`
+/// (the report lists them, as it lists a run's from run.json).
 pub fn write_kin_manifest(
     dir: &Path,
     source: &KinSource,
     config: &PipelineConfig,
+    warnings: &[String],
 ) -> Result<(), PipelineError> {
     let keypoints =
         std::fs::canonicalize(source.keypoints).unwrap_or(source.keypoints.to_path_buf());
@@ -31,6 +33,7 @@ pub fn write_kin_manifest(
         "fps": source.fps,
         "individual": source.individual,
         "config": config,
+        "warnings": warnings,
     });
     let path = dir.join("kin.json");
     let text = serde_json::to_string_pretty(&manifest)

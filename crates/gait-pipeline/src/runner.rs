@@ -513,16 +513,18 @@ pub fn default_models_dir() -> PathBuf {
 }
 
 /// What `gait kin` (and Python's `gait.kin`) does with keypoints: the
-/// kinematics written into `out`, then the exports, report and PDF (no
-/// overlay: there is no video).
+/// kinematics written into `out` with kin.json naming `source`, then the
+/// exports, report and PDF (no overlay: there is no video).
 pub fn kin_and_write(
     seq: &PoseSequence,
     config: &PipelineConfig,
     out: &Path,
+    source: &crate::KinSource,
 ) -> Result<(gait_kin::KinResult, crate::Outputs), PipelineError> {
     let result = gait_kin::analyse(seq, &config.postprocess, &config.kinematics)
         .map_err(gait_core::StageError::from)?;
     gait_kin::write_outputs(&result, out).map_err(gait_core::StageError::from)?;
+    crate::write_kin_manifest(out, source, config, &result.warnings)?;
     let outputs = crate::write_outputs(&crate::OutputOptions {
         dir: out,
         input: None,

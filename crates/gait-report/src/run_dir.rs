@@ -47,13 +47,15 @@ impl Report {
             ..Default::default()
         };
         let run = dir.join("run.json");
+        let kin = dir.join("kin.json");
         if run.exists() {
-            let text = std::fs::read_to_string(&run)
-                .map_err(|e| EvalError::io(format!("reading {}", run.display()), e))?;
-            let v: Value = serde_json::from_str(&text).map_err(|e| EvalError::input(&run, e))?;
+            let v = read_json(&run)?;
             collect_warnings(&v, &mut r.warnings);
             r.subject = crate::subject_lines::describe(&v);
             r.manifest = Some(v);
+        } else if kin.exists() {
+            // A `gait kin` folder: its analysis' warnings.
+            collect_warnings(&read_json(&kin)?, &mut r.warnings);
         }
         let sagittal_norm = normative.as_ref().map(|n| n.name.as_str());
         r.frontal = crate::frontal::FrontalReport::read(dir, r.manifest.as_ref(), sagittal_norm)?;
@@ -150,6 +152,12 @@ fn corrections_table(manifest: &Value) -> Option<Table> {
             vec!["keypoint set".into(), n("keypoints"), String::new()],
         ],
     })
+}
+
+fn read_json(path: &Path) -> Result<Value, EvalError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| EvalError::io(format!("reading {}", path.display()), e))?;
+    serde_json::from_str(&text).map_err(|e| EvalError::input(path, e))
 }
 
 /// Every string in arrays under a key named `warnings`, at any depth.

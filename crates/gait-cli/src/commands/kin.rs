@@ -67,8 +67,14 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
             one_line(&e.to_string())
         ))
     })?;
-    let (result, outputs) = gait_pipeline::kin_and_write(&seq, &config, &args.out)?;
-    write_manifest(&args, fps, &config)?;
+    let tool = format!("gait kin {}", env!("CARGO_PKG_VERSION"));
+    let source = gait_pipeline::KinSource {
+        keypoints: &args.keypoints,
+        fps,
+        individual: args.individual.as_deref(),
+        tool: &tool,
+    };
+    let (result, outputs) = gait_pipeline::kin_and_write(&seq, &config, &args.out, &source)?;
     for w in &result.warnings {
         eprintln!("warning: {w}");
     }
@@ -83,17 +89,4 @@ pub fn execute(args: Args, _models_dir: &Path) -> Result<(), CliError> {
         args.out.display()
     );
     Ok(())
-}
-
-/// kin.json beside the outputs, so that `gait review OUT --frame N` opens the folder.
-fn write_manifest(args: &Args, fps: f64, config: &PipelineConfig) -> Result<(), CliError> {
-    let tool = format!("gait kin {}", env!("CARGO_PKG_VERSION"));
-    let source = gait_pipeline::KinSource {
-        keypoints: &args.keypoints,
-        fps,
-        individual: args.individual.as_deref(),
-        tool: &tool,
-    };
-    gait_pipeline::write_kin_manifest(&args.out, &source, config)
-        .map_err(|e| CliError::new(e.to_string()))
 }

@@ -35,6 +35,7 @@ fn view(v: &ViewDecision) -> Table {
         .with("how", texts([&v.how]))
         .with("frontal_share", nums([v.frontal_share]))
         .with("growth", nums([v.growth]))
+        .with("walk_angle_deg", nums([v.walk_angle_deg]))
 }
 
 fn angles(f: &FrontalResult, first_frame: usize, fps: f64) -> Table {
