@@ -15,11 +15,26 @@ pub fn describe(run: &Value) -> Vec<String> {
         .get("kinematics")
         .or_else(|| run.pointer("/extra/kinematics"));
     if let Some(k) = kin {
+        lines.extend(view(k));
         bouts(k, &mut lines);
         cycles(k, &mut lines);
     }
     lines.extend(legs_in_image(run).map(|l| format!("Image: {l}")));
     lines
+}
+
+/// The view analysed and how it was decided (with the walk's angle to the camera where the
+/// frame size was known).
+fn view(k: &Value) -> Option<String> {
+    let v = k.get("view")?;
+    let name = match v.get("view")?.as_str()? {
+        "sagittal" => "side",
+        "anterior" => "front (walking toward the camera)",
+        "posterior" => "back (walking away from the camera)",
+        other => other,
+    };
+    let how = v.get("how").and_then(Value::as_str).unwrap_or("");
+    Some(format!("View: {name} ({how})."))
 }
 
 /// How large and how sharp the subject's legs were in the image of a run (its run.json), over
@@ -221,6 +236,7 @@ mod tests {
                 "in_view": [[34, 120], [124, 199]]
             },
             "extra": {"kinematics": {
+                "view": {"view": "sagittal", "how": "auto: hips or shoulders apart in 0 % of frames; the walk about 82 deg off the camera's axis"},
                 "bouts": [{"first": 55, "last": 185, "direction": "left", "mean_speed": 0.8}],
                 "cycle_quality": [
                     {"side": "left", "accepted": true, "leg_px": 186.9, "blur_px": 1.66, "swing_contrast": 0.91},
@@ -236,13 +252,17 @@ mod tests {
         );
         assert!(lines[1].contains("34-120, 124-199"), "{lines:?}");
         assert!(lines[2].contains("track 0"), "{lines:?}");
+        assert_eq!(
+            lines[3],
+            "View: side (auto: hips or shoulders apart in 0 % of frames; the walk about 82 deg off the camera's axis)."
+        );
         assert!(
-            lines[3].contains("frames 55-185 (walking left, 0.80"),
+            lines[4].contains("frames 55-185 (walking left, 0.80"),
             "{lines:?}"
         );
-        assert!(lines[4].contains("1 accepted, 1 rejected"), "{lines:?}");
+        assert!(lines[5].contains("1 accepted, 1 rejected"), "{lines:?}");
         assert_eq!(
-            lines[6],
+            lines[7],
             "Image: the legs 192 px long (thigh + shank, median over the 2 strides found; a stride under 100 px is rejected), their outline blurred over 1.7 px (0.9 % of the leg; over 1.5 % a stride is rejected), and the feet swinging keep 91 % of their outline's contrast standing (under 60 %, motion blur, a stride is rejected)."
         );
         assert!(describe(&serde_json::json!({})).is_empty());
