@@ -166,6 +166,19 @@ def lateral_excursion(frames, side, start, end):
     return best
 
 
+def progression_normal(pelvis):
+    """Unit (x, z) vector across the line of progression: perpendicular to the principal axis of
+    the pelvis' horizontal path."""
+    n = len(pelvis)
+    mx = sum(p[0] for p in pelvis) / n
+    mz = sum(p[2] for p in pelvis) / n
+    sxx = sum((p[0] - mx) ** 2 for p in pelvis)
+    szz = sum((p[2] - mz) ** 2 for p in pelvis)
+    sxz = sum((p[0] - mx) * (p[2] - mz) for p in pelvis)
+    a = 0.5 * math.atan2(2 * sxz, sxx - szz)
+    return (-math.sin(a), math.cos(a))
+
+
 def leg_length_mm(frames):
     total = 0.0
     for f in frames:
@@ -257,13 +270,19 @@ def derive_trial(src, trial, scorer, out_root, noise, rng):
         ref_lines.append(str(f["frame_index"]) + "," + ",".join(f"{ang[c]:.4f}" for c in ref_cols))
     summary["angle_ranges"] = ranges
 
+    # Step width is taken across the line of progression (the pelvis' path, fitted), not along
+    # the lab's z axis: the walkers' paths run 1.2 deg (healthy) and -2.1 deg (Parkinson's) off
+    # the lab's x axis, which with the heels 0.6-0.7 m apart along the walk moves a z distance
+    # by up to 1.5 cm.
+    n = progression_normal(pelvis)
     step_lines = ["side,frame,step_width_cm,step_width_leg"]
     widths = []
     hs_all = sorted((fr, side) for side in ("left", "right") for fr in gt["hs_frames"][side])
     for fr, side in hs_all:
         other = "right" if side == "left" else "left"
         lm = frames[fr]["landmark_positions"]
-        w = abs(lm[f"{side}_heel"][2] - lm[f"{other}_heel"][2])
+        d = sub(lm[f"{side}_heel"], lm[f"{other}_heel"])
+        w = abs(d[0] * n[0] + d[2] * n[1])
         widths.append(w / 10)
         step_lines.append(f"{side},{fr},{w / 10:.3f},{w / leg_mm:.5f}")
     summary["step_width_cm"] = widths

@@ -12,7 +12,10 @@ and compares with the 3-D truth:
   frames of the accepted cycles;
 - in a side view, knee flexion against the 3-D angle between thigh and shank, MAE over the same;
 - whether `gait kin` warned that the walk runs obliquely to the camera, with its estimated angle
-  (crates/gait-kin/src/walk_angle.rs; 0 straight toward or away, 90 across).
+  (crates/gait-kin/src/walk_angle.rs; 0 straight toward or away, 90 across);
+- then, with the camera looking along the walk from 0.5-1.5 m beside its line, the mean
+  circumduction and heel offset per side (crates/gait-kin/src/frontal/feet.rs), against the
+  camera on the line.
 
 Clean projections (no pose-model noise). Needs only the Python standard library and a built `gait`:
 
@@ -38,15 +41,22 @@ import derive_frontal as df  # noqa: E402
 ANGLES = (0, 10, 20, 30, 45, 60, 70, 80, 90, 100, 110, 120, 135, 150, 160, 170, 180)
 # The projections kept as fixtures (tests/data/oblique, crates/gait-kin/tests/oblique.rs).
 FIXTURES = {("gaitkit_pd", 30), ("gaitkit_pd", 60), ("fukuchi2018", 160)}
+FIXTURES_BESIDE = {("gaitkit_pd", 0, 1000)}
 NEAR_MM = 3500.0
 HS_FRAMES = 5
 
 
+# The camera moved this far (mm) to its right from the walking line, looking along it.
+BESIDE_MM = (0, 500, 1000, 1500)
+BESIDE_ANGLES = (0, 180)
+
+
 class TurnedCamera:
     """A horizontal pinhole camera whose optical axis makes `angle` degrees with the walking
-    direction's reverse (0: looking back along -x at the approaching walker)."""
+    direction's reverse (0: looking back along -x at the approaching walker), moved `beside`
+    mm to its own right."""
 
-    def __init__(self, angle, pelvis, floor_y):
+    def __init__(self, angle, pelvis, floor_y, beside=0.0):
         a = math.radians(angle)
         # Looking along f; at 90 deg along +z, from the walker's left (right is +z).
         self.f = (-math.cos(a), 0.0, math.sin(a))
@@ -56,7 +66,8 @@ class TurnedCamera:
         mid = [sum(p[i] for p in pelvis) / len(pelvis) for i in range(3)]
         reach = max(sum((p[i] - mid[i]) * -self.f[i] for i in range(3)) for p in pelvis)
         d = NEAR_MM + reach
-        self.pos = (mid[0] - d * self.f[0], floor_y + df.CAMERA_HEIGHT_MM, mid[2] - d * self.f[2])
+        self.pos = (mid[0] - d * self.f[0] + beside * self.r[0], floor_y + df.CAMERA_HEIGHT_MM,
+                    mid[2] - d * self.f[2] + beside * self.r[2])
 
     def project(self, p):
         q = [p[i] - self.pos[i] for i in range(3)]
@@ -148,6 +159,24 @@ def analyse(trial_frames, out, with_trunk):
     return res
 
 
+def feet(out):
+    """Mean circumduction and heel offset per side (cm) from frontal_feet.csv."""
+    rows = read_csv(out / "frontal_feet.csv")
+    mean = {}
+    for m in ("circumduction", "heel_offset"):
+        for s in ("left", "right"):
+            v = [float(r["value"]) for r in rows if r["measure"] == m and r["side"] == s]
+            mean[(m, s)] = sum(v) / len(v) if v else math.nan
+    return mean
+
+
+def project(trial_frames, names, cam, out, scorer):
+    image = [{n: cam.project(f["landmark_positions"][n]) for n in names} for f in trial_frames]
+    out.mkdir(parents=True, exist_ok=True)
+    df.write_keypoints(out / "keypoints.csv", scorer, names, trial_frames, image)
+    return image
+
+
 def heel_strike_match(hs, reference):
     """(matched within HS_FRAMES, missed, extra) against the reference heel strikes."""
     matched = missed = 0
@@ -187,14 +216,11 @@ def main():
         results = {}
         for angle in ANGLES:
             cam = TurnedCamera(angle, pelvis, floor_y)
-            image = [{n: cam.project(f["landmark_positions"][n]) for n in names} for f in frames]
             out = Path(args.work) / f"{trial}_{angle:03d}"
-            out.mkdir(parents=True, exist_ok=True)
-            df.write_keypoints(out / "keypoints.csv", scorer, names, frames, image)
+            project(frames, names, cam, out, scorer)
             if args.fixtures and (trial, angle) in FIXTURES:
                 fixture = Path(args.fixtures) / f"{trial}_{angle:03d}"
-                fixture.mkdir(parents=True, exist_ok=True)
-                df.write_keypoints(fixture / "keypoints.csv", scorer, names, frames, image)
+                project(frames, names, cam, fixture, scorer)
                 truth = {"camera_angle_deg": angle, "walk_angle_deg": min(angle, 180 - angle), "fps": 150,
                          "frame_size": [df.WIDTH, df.HEIGHT], "focal_px": df.FOCAL_PX}
                 (fixture / "truth.json").write_text(json.dumps(truth) + "\n")
@@ -210,8 +236,37 @@ def main():
             lines.append(f"| {trial} | {angle} | {r['view']} | {warned} | {m} of {m + miss} ({miss} / {extra}) | "
                          f"{r['cycles']['left']} / {r['cycles']['right']} | {maes} |")
             print(lines[-1], flush=True)
+        lines += beside_rows(args, trial, frames, names, pelvis, floor_y, height_m, scorer)
     if args.md:
         Path(args.md).write_text("\n".join(lines) + "\n")
+
+
+def beside_rows(args, trial, frames, names, pelvis, floor_y, height_m, scorer):
+    """The camera looking along the walk from beside its line: circumduction and heel offsets
+    against the camera on the line."""
+    rows = ["", f"| {trial}: camera beside the line (m) | view | circumduction L / R (cm) | "
+            "heel offset L / R (cm) | warned |", "| --- | --- | --- | --- | --- |"]
+    for angle in BESIDE_ANGLES:
+        for beside in BESIDE_MM:
+            cam = TurnedCamera(angle, pelvis, floor_y, beside)
+            out = Path(args.work) / f"{trial}_{angle:03d}_beside{beside}"
+            project(frames, names, cam, out, scorer)
+            if args.fixtures and (trial, angle, beside) in FIXTURES_BESIDE:
+                fixture = Path(args.fixtures) / out.name
+                project(frames, names, cam, fixture, scorer)
+                truth = {"camera_angle_deg": angle, "beside_mm": beside, "fps": 150,
+                         "frame_size": [df.WIDTH, df.HEIGHT], "focal_px": df.FOCAL_PX}
+                (fixture / "truth.json").write_text(json.dumps(truth) + "\n")
+            run_gait(args.gait, out / "keypoints.csv", out / "kin", height_m)
+            r = analyse(frames, out / "kin", False)
+            m = feet(out / "kin")
+            warned = oblique_warning(out / "kin")
+            rows.append(f"| {'toward' if angle == 0 else 'away'}, {beside / 1000:.1f} | {r['view']} | "
+                        f"{m[('circumduction', 'left')]:.1f} / {m[('circumduction', 'right')]:.1f} | "
+                        f"{m[('heel_offset', 'left')]:.1f} / {m[('heel_offset', 'right')]:.1f} | "
+                        f"{'-' if warned is None else warned} |")
+            print(rows[-1], flush=True)
+    return rows
 
 
 if __name__ == "__main__":

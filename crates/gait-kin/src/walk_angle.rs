@@ -31,12 +31,35 @@ pub const TOLERANCE_DEG: f64 = 15.0;
 /// 90: across), from the mid-hip's image x and the body's size over the frames of `t` in a
 /// frame `width` pixels wide; NaN with too few frames or without a clear line.
 pub fn estimate(t: &Tracks, width: u32) -> f64 {
-    let (Some(lh), Some(rh)) = (
-        t.leg_index(crate::config::Side::Left, "hip"),
-        t.leg_index(crate::config::Side::Right, "hip"),
-    ) else {
+    let Some(((mx, ms), (dx, ds))) = walk_line(t) else {
         return f64::NAN;
     };
+    let focal = f64::from(width) / 2.0 / (FIELD_OF_VIEW_DEG.to_radians() / 2.0).tan();
+    let centre = f64::from(width) / 2.0;
+    // x_v = mx - ms * dx / ds; tan(angle) = (x_v - centre) / focal, kept finite as ds -> 0.
+    let angle = ((mx - centre) * ds - ms * dx)
+        .atan2(focal * ds)
+        .to_degrees()
+        .abs();
+    angle.min(180.0 - angle)
+}
+
+/// The image x of the walk's vanishing point: where every line parallel to the walk, at any
+/// height and lateral offset, ends in the image. `None` without a walk along the camera's axis
+/// (the body's size changing by less than 10 % over the walk), where it lies far outside.
+pub fn vanishing_x(t: &Tracks) -> Option<f64> {
+    let ((mx, ms), (dx, ds)) = walk_line(t)?;
+    let (lo, hi) = size_range(t)?;
+    (hi > 1.1 * lo && ds.abs() > 1e-9).then(|| mx - ms * dx / ds)
+}
+
+/// The mid-hip's image x and the body's size over the frames with both: the line they lie on
+/// (point, direction), `None` with too few frames.
+fn walk_line(t: &Tracks) -> Option<((f64, f64), (f64, f64))> {
+    let (lh, rh) = (
+        t.leg_index(crate::config::Side::Left, "hip")?,
+        t.leg_index(crate::config::Side::Right, "hip")?,
+    );
     let points: Vec<(f64, f64)> = (0..t.len())
         .filter_map(|i| {
             let (a, b) = (t.at(lh, i)?, t.at(rh, i)?);
@@ -45,19 +68,23 @@ pub fn estimate(t: &Tracks, width: u32) -> f64 {
         })
         .collect();
     if points.len() < MIN_FRAMES {
-        return f64::NAN;
+        return None;
     }
-    let focal = f64::from(width) / 2.0 / (FIELD_OF_VIEW_DEG.to_radians() / 2.0).tan();
-    let centre = f64::from(width) / 2.0;
-    let Some(((mx, ms), (dx, ds))) = principal_line(&points) else {
-        return f64::NAN;
-    };
-    // x_v = mx - ms * dx / ds; tan(angle) = (x_v - centre) / focal, kept finite as ds -> 0.
-    let angle = ((mx - centre) * ds - ms * dx)
-        .atan2(focal * ds)
-        .to_degrees()
-        .abs();
-    angle.min(180.0 - angle)
+    principal_line(&points)
+}
+
+/// The 10th and 90th percentiles of the body's size over the frames where it is seen.
+fn size_range(t: &Tracks) -> Option<(f64, f64)> {
+    let mut s: Vec<f64> = (0..t.len())
+        .map(|i| body_size(t, i))
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .collect();
+    if s.is_empty() {
+        return None;
+    }
+    s.sort_by(f64::total_cmp);
+    let at = |q: f64| s.get(((s.len() - 1) as f64 * q).round() as usize).copied();
+    Some((at(0.1)?, at(0.9)?))
 }
 
 /// The line through `points` that fits them best in both coordinates (their principal axis):

@@ -3,12 +3,13 @@
 //! [`crate::view`]; this module supplies the parts of the chain that differ from a side view:
 //! the leg labels ([`labels`]), the body's scale per frame ([`scale`]), bouts ([`bouts`]),
 //! events ([`events`], heel strikes placed by `heel_strikes`) and the measures ([`measures`],
-//! [`cycles`]). Quality control and strides are the side view's, with segment lengths taken in
+//! [`cycles`], [`feet`]). Quality control and strides are the side view's, with segment lengths taken in
 //! body sizes.
 
 pub mod bouts;
 pub mod cycles;
 pub mod events;
+pub mod feet;
 mod heel_strikes;
 pub mod labels;
 mod lead;
@@ -25,7 +26,8 @@ use crate::events::Event;
 use crate::quality::CycleQuality;
 use crate::tracks::{Tracks, median};
 use crate::view::View;
-pub use cycles::{FootLength, FrontalScalar};
+pub use cycles::FrontalScalar;
+pub use feet::FootLength;
 pub use measures::{FrontalAngles, MEASURES};
 pub use scale::Scale;
 
@@ -94,16 +96,17 @@ pub fn measure(
                 .unwrap_or_default()
         })
         .collect();
-    let feet = cycles::Feet {
+    let feet = feet::Feet {
         t,
         view: f.view,
         scale: f.scale,
-        axis_x: axis_x(t, kin),
+        events: f.events,
+        vanishing_x: crate::walk_angle::vanishing_x(t).unwrap_or_else(|| axis_x(t, kin)),
     };
     let in_bout = |frame: usize| bout_of(f.bouts, frame).is_some();
-    let mut lengths = feet.step_widths(f.events, &in_bout, kin);
-    lengths.extend(feet.heel_offsets(f.events, &in_bout, kin));
-    lengths.extend(feet.circumduction(f.accepted, f.events, kin));
+    let mut lengths = feet.step_widths(&in_bout, kin);
+    lengths.extend(feet.heel_offsets(&in_bout, kin));
+    lengths.extend(feet.circumduction(f.accepted, kin));
     FrontalResult {
         view: f.view,
         leg_per_size: f.scale.leg_per_size,
@@ -124,8 +127,8 @@ pub fn view_name(v: View) -> &'static str {
     }
 }
 
-/// The camera's axis in the image: the frame's middle when its size is known, else where the
-/// walker's pelvis mostly is (a frontal walk is filmed along the walking line).
+/// The camera's axis in the image, where the walk has no vanishing point: the frame's middle
+/// when its size is known, else where the walker's pelvis mostly is.
 fn axis_x(t: &Tracks, kin: &KinematicsConfig) -> f64 {
     if let Some([w, _]) = kin.frame_size {
         return w as f64 / 2.0;
