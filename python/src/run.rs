@@ -111,7 +111,6 @@ pub(crate) fn kin<'py>(
     let dir = out.clone();
     let (kin, _outputs) = py
         .detach(|| -> Result<_, gait_pipeline::PipelineError> {
-            let written = gait_pipeline::kin_and_write(&seq, &config, &out)?;
             // The table is kept as keypoints.csv and named by kin.json, so that
             // `gait review OUT --frame N` (the checklist's links) opens the folder.
             let keypoints = gait_pipeline::write_kin_keypoints(&out, &seq)?;
@@ -122,8 +121,7 @@ pub(crate) fn kin<'py>(
                 individual: None,
                 tool: &tool,
             };
-            gait_pipeline::write_kin_manifest(&out, &source, &config)?;
-            Ok(written)
+            gait_pipeline::kin_and_write(&seq, &config, &out, &source)
         })
         .map_err(to_py)?;
     let result = tables::of_kin(py, &kin, &seq)?;
