@@ -178,3 +178,38 @@ fn a_real_front_view_the_man_on_the_box() {
     let worst = rows.iter().map(|r| r[obliquity].abs()).fold(0.0, f64::max);
     assert!(worst <= 5.0, "pelvic obliquity up to {worst:.1} deg");
 }
+
+/// A walk filmed 28 deg off the camera's axis (tests/data/oblique, the Parkinson's walk toward
+/// a turned camera): `gait kin` warns with the angle, the report lists the warning, and the
+/// checklist judges none of its front items (at the pelvis' scale it called a circumduction
+/// that the walk does not have) but says why.
+#[test]
+fn an_oblique_front_view_is_warned_and_not_judged() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("kin");
+    let stderr = kin(
+        &fixture("oblique/gaitkit_pd_030"),
+        "150",
+        &out,
+        &["kinematics.frame_size=[1920, 1080]", "report.pdf=false"],
+    );
+    assert!(stderr.contains("the walk runs about 28 deg off"), "{stderr}");
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.contains("the walk runs about 28 deg off"));
+    let list = std::fs::read_to_string(out.join("checklist.csv")).unwrap();
+    let front: Vec<&str> = list
+        .lines()
+        .filter(|l| {
+            ["lateral_trunk", "hip_hiking", "abducted_gait", "circumduction"]
+                .iter()
+                .any(|i| l.starts_with(i))
+        })
+        .collect();
+    assert_eq!(front.len(), 8, "{list}");
+    for l in front {
+        assert!(
+            l.contains(",not assessable,") && l.contains("28 deg off the camera's axis"),
+            "{l}"
+        );
+    }
+}

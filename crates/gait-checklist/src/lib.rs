@@ -8,6 +8,7 @@
 //! run's checklist can be made again from them; checklist.csv and the report's section are
 //! written from its [`Checklist`].
 
+mod camera;
 mod config;
 mod frontal_items;
 mod html;
@@ -75,6 +76,7 @@ pub fn assess(
     verdicts.extend(vaulting::assess(&run, cfg));
     verdicts.extend(trunk_arms::assess(&run, cfg));
     verdicts.extend(whip::assess(&run, cfg));
+    camera::gate(&mut verdicts, &run);
     let here = dir.display().to_string();
     for v in &mut verdicts {
         v.run.clone_from(&here);

@@ -44,6 +44,9 @@ pub struct FootLength {
 pub struct RunFiles {
     /// `sagittal`, `anterior` or `posterior`.
     pub view: String,
+    /// A front or back view's walk angle to the camera's axis (frontal_view.csv; NaN where not
+    /// known).
+    pub walk_angle_deg: f64,
     pub strides: Vec<Stride>,
     /// cycles_all.csv: (side, joint, first frame) -> 101 values.
     pub sagittal: BTreeMap<(Side, String, usize), Vec<f64>>,
@@ -117,12 +120,16 @@ impl RunFiles {
     pub fn read(dir: &Path) -> Result<Self, ChecklistError> {
         let mut r = RunFiles {
             view: "sagittal".into(),
+            walk_angle_deg: f64::NAN,
             ..Default::default()
         };
         if let Some((h, rows)) = read(&dir.join("frontal_view.csv"))? {
             let c = col(&h, "view", "frontal_view.csv")?;
+            // Run folders written before the walk's angle was estimated have no such column.
+            let angle = h.iter().position(|x| x == "walk_angle_deg");
             if let Some(v) = rows.first() {
                 r.view = v[c].clone();
+                r.walk_angle_deg = angle.map_or(f64::NAN, |a| num(&v[a]));
             }
         }
         r.strides = strides(dir)?;
