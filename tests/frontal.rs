@@ -193,16 +193,24 @@ fn an_oblique_front_view_is_warned_and_not_judged() {
         &out,
         &["kinematics.frame_size=[1920, 1080]", "report.pdf=false"],
     );
-    assert!(stderr.contains("the walk runs about 28 deg off"), "{stderr}");
+    assert!(
+        stderr.contains("the walk runs about 28 deg off"),
+        "{stderr}"
+    );
     let report = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(report.contains("the walk runs about 28 deg off"));
     let list = std::fs::read_to_string(out.join("checklist.csv")).unwrap();
     let front: Vec<&str> = list
         .lines()
         .filter(|l| {
-            ["lateral_trunk", "hip_hiking", "abducted_gait", "circumduction"]
-                .iter()
-                .any(|i| l.starts_with(i))
+            [
+                "lateral_trunk",
+                "hip_hiking",
+                "abducted_gait",
+                "circumduction",
+            ]
+            .iter()
+            .any(|i| l.starts_with(i))
         })
         .collect();
     assert_eq!(front.len(), 8, "{list}");

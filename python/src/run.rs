@@ -112,8 +112,11 @@ pub(crate) fn kin<'py>(
     let (kin, _outputs) = py
         .detach(|| -> Result<_, gait_pipeline::PipelineError> {
             // The table is kept as keypoints.csv and named by kin.json, so that
-            // `gait review OUT --frame N` (the checklist's links) opens the folder.
-            let keypoints = gait_pipeline::write_kin_keypoints(&out, &seq)?;
+            // `gait review OUT --frame N` (the checklist's links) opens the folder. It is
+            // written after the report, which would otherwise draw its skeleton strip, as the
+            // report of `gait kin` (whose keypoints lie elsewhere) does not.
+            let keypoints = std::path::absolute(out.join("keypoints.csv"))
+                .unwrap_or_else(|_| out.join("keypoints.csv"));
             let tool = format!("gait.kin {}", env!("CARGO_PKG_VERSION"));
             let source = gait_pipeline::KinSource {
                 keypoints: &keypoints,
@@ -121,7 +124,9 @@ pub(crate) fn kin<'py>(
                 individual: None,
                 tool: &tool,
             };
-            gait_pipeline::kin_and_write(&seq, &config, &out, &source)
+            let written = gait_pipeline::kin_and_write(&seq, &config, &out, &source)?;
+            gait_pipeline::write_kin_keypoints(&out, &seq)?;
+            Ok(written)
         })
         .map_err(to_py)?;
     let result = tables::of_kin(py, &kin, &seq)?;
