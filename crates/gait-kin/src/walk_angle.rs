@@ -31,7 +31,7 @@ pub const TOLERANCE_DEG: f64 = 15.0;
 /// 90: across), from the mid-hip's image x and the body's size over the frames of `t` in a
 /// frame `width` pixels wide; NaN with too few frames or without a clear line.
 pub fn estimate(t: &Tracks, width: u32) -> f64 {
-    let Some(((mx, ms), (dx, ds))) = walk_line(t) else {
+    let Some(((mx, ms), (dx, ds))) = walk_points(t).and_then(|p| principal_line(&p)) else {
         return f64::NAN;
     };
     let focal = f64::from(width) / 2.0 / (FIELD_OF_VIEW_DEG.to_radians() / 2.0).tan();
@@ -48,14 +48,16 @@ pub fn estimate(t: &Tracks, width: u32) -> f64 {
 /// height and lateral offset, ends in the image. `None` without a walk along the camera's axis
 /// (the body's size changing by less than 10 % over the walk), where it lies far outside.
 pub fn vanishing_x(t: &Tracks) -> Option<f64> {
-    let ((mx, ms), (dx, ds)) = walk_line(t)?;
-    let (lo, hi) = size_range(t)?;
-    (hi > 1.1 * lo && ds.abs() > 1e-9).then(|| mx - ms * dx / ds)
+    let points = walk_points(t)?;
+    let ((mx, ms), (dx, ds)) = principal_line(&points)?;
+    let mut sizes: Vec<f64> = points.iter().map(|p| p.1).collect();
+    sizes.sort_by(f64::total_cmp);
+    let at = |q: f64| sizes[((sizes.len() - 1) as f64 * q).round() as usize];
+    (at(0.9) > 1.1 * at(0.1) && ds.abs() > 1e-9).then(|| mx - ms * dx / ds)
 }
 
-/// The mid-hip's image x and the body's size over the frames with both: the line they lie on
-/// (point, direction), `None` with too few frames.
-fn walk_line(t: &Tracks) -> Option<((f64, f64), (f64, f64))> {
+/// The mid-hip's image x and the body's size over the frames with both; `None` with too few.
+fn walk_points(t: &Tracks) -> Option<Vec<(f64, f64)>> {
     let (lh, rh) = (
         t.leg_index(crate::config::Side::Left, "hip")?,
         t.leg_index(crate::config::Side::Right, "hip")?,
@@ -67,24 +69,7 @@ fn walk_line(t: &Tracks) -> Option<((f64, f64), (f64, f64))> {
             (size.is_finite() && size > 0.0).then_some(((a.0 + b.0) / 2.0, size))
         })
         .collect();
-    if points.len() < MIN_FRAMES {
-        return None;
-    }
-    principal_line(&points)
-}
-
-/// The 10th and 90th percentiles of the body's size over the frames where it is seen.
-fn size_range(t: &Tracks) -> Option<(f64, f64)> {
-    let mut s: Vec<f64> = (0..t.len())
-        .map(|i| body_size(t, i))
-        .filter(|s| s.is_finite() && *s > 0.0)
-        .collect();
-    if s.is_empty() {
-        return None;
-    }
-    s.sort_by(f64::total_cmp);
-    let at = |q: f64| s.get(((s.len() - 1) as f64 * q).round() as usize).copied();
-    Some((at(0.1)?, at(0.9)?))
+    (points.len() >= MIN_FRAMES).then_some(points)
 }
 
 /// The line through `points` that fits them best in both coordinates (their principal axis):

@@ -48,8 +48,6 @@ pub fn write_kin_keypoints(
     dir: &Path,
     seq: &gait_core::PoseSequence,
 ) -> Result<std::path::PathBuf, PipelineError> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| PipelineError::io(format!("creating {}", dir.display()), e))?;
     let path = dir.join("keypoints.csv");
     crate::atomic::write_with(&path, |w| {
         gait_core::dlc::write(w, "gait.kin", seq).map_err(std::io::Error::other)

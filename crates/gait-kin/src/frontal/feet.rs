@@ -10,10 +10,11 @@
 //! (tools/frontal/oblique.py) a healthy walk straight toward a camera 1 m beside its line read
 //! 12.0 cm of circumduction on one side, against 2.7 with the camera on the line (now 6.1
 //! against 3.4; BENCHMARKS.md, "A camera beside the walking line"). A planted foot stays where
-//! it landed, at the depth the pelvis has when it passes over it (mid-stance); a swinging foot moves between two such places, and its depth (as
-//! 1 / its leg's image length) is taken as moving between them evenly in time: on the healthy
-//! trial's motion capture the ankle's depth in swing kept within 6 % of its travel of that,
-//! while a minimum-jerk profile was up to 13 % off.
+//! it landed, at the depth the pelvis has when it passes over it (mid-stance); a swinging foot
+//! moves between two such places, and its depth (as 1 / its leg's image length) is taken as
+//! moving between them evenly in time: on the healthy trial's motion capture the ankle's depth
+//! in swing kept within 6 % of its travel of that, while a minimum-jerk profile was up to 13 %
+//! off.
 
 use serde::Serialize;
 

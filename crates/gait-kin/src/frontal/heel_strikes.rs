@@ -87,16 +87,15 @@ pub fn place(t: &Tracks, view: View, min_stride_s: f64, events: &mut Vec<Event>)
 fn walk_stride(events: &[Event], supported: &[bool], shortest: f64) -> Option<f64> {
     let mut gaps = Vec::new();
     for side in crate::config::Side::BOTH {
-        let times: Vec<f64> = events
+        let mut times: Vec<f64> = events
             .iter()
             .zip(supported)
             .filter(|(e, s)| **s && e.side == side && e.event == EventKind::HeelStrike)
             .map(|(e, _)| e.time())
             .collect();
-        let mut sorted = times;
-        sorted.sort_by(f64::total_cmp);
+        times.sort_by(f64::total_cmp);
         gaps.extend(
-            sorted
+            times
                 .windows(2)
                 .map(|w| w[1] - w[0])
                 .filter(|&g| g >= shortest),

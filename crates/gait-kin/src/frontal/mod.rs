@@ -3,8 +3,8 @@
 //! [`crate::view`]; this module supplies the parts of the chain that differ from a side view:
 //! the leg labels ([`labels`]), the body's scale per frame ([`scale`]), bouts ([`bouts`]),
 //! events ([`events`], heel strikes placed by `heel_strikes`) and the measures ([`measures`],
-//! [`cycles`], [`feet`]). Quality control and strides are the side view's, with segment lengths taken in
-//! body sizes.
+//! [`cycles`], [`feet`]). Quality control and strides are the side view's, with segment lengths
+//! taken in body sizes.
 
 pub mod bouts;
 pub mod cycles;
