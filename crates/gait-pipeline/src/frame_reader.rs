@@ -10,7 +10,7 @@ use crate::video_decoder::VideoDecoder;
 use crate::{PipelineError, still};
 
 pub(crate) enum Source {
-    Video(VideoDecoder),
+    Video(Box<VideoDecoder>),
     Images(Vec<PathBuf>),
     /// Frames decoded ahead by another reader on its own thread.
     Ahead(std::sync::mpsc::Receiver<Result<Option<Frame>, PipelineError>>),
@@ -92,9 +92,10 @@ impl FrameReader {
                 img
             }
             Source::Video(decoder) => {
-                let len = self.info.width as usize * self.info.height as usize * 3;
+                let size = (self.info.width as usize, self.info.height as usize);
+                let len = size.0 * size.1 * 3;
                 let mut buf = Vec::with_capacity(len);
-                match decoder.read_frame(&mut buf, len)? {
+                match decoder.read_frame(&mut buf, size)? {
                     0 => {
                         decoder.finish(index)?;
                         return Ok(None);

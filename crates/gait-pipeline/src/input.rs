@@ -55,6 +55,10 @@ pub struct InputInfo {
     pub(crate) decode_warnings: DecodeWarnings,
     /// Time the readers waited for decoded frames (shared by the readers).
     pub(crate) reading: ReadClock,
+    /// How a 4:2:0 video's frames become RGB here rather than in ffmpeg (yuv.rs), when they can.
+    pub(crate) yuv: Option<crate::yuv::Yuv420>,
+    /// Whether ffmpeg converts this input's frames as yuv.rs does (shared by the readers).
+    pub(crate) yuv_verdict: crate::yuv::YuvVerdict,
 }
 
 /// Nanoseconds spent in [`FrameReader::next_frame`], over every reader of one input.
@@ -188,6 +192,8 @@ impl InputInfo {
             kind: Kind::Images(files),
             decode_warnings: DecodeWarnings::default(),
             reading: ReadClock::default(),
+            yuv: None,
+            yuv_verdict: Default::default(),
         })
     }
 
@@ -279,19 +285,24 @@ impl InputInfo {
     /// How every pass decodes this video: its stream, its frames resampled to a constant rate,
     /// converted to standard range and deinterlaced where it needs it; all frames, full size.
     fn request(&self) -> Request {
+        let standard_range = self
+            .hdr_transfer
+            .as_deref()
+            .and_then(crate::picture::to_standard_range);
         Request {
             size: None,
             from: 0,
             resample: self.resampled_fps(),
             stream: self.stream,
-            standard_range: self
-                .hdr_transfer
-                .as_deref()
-                .and_then(crate::picture::to_standard_range),
+            standard_range,
             deinterlace: self
                 .interlaced
                 .as_deref()
                 .and_then(crate::picture::deinterlace),
+            // The tone mapping's output is not the file's 4:2:0.
+            yuv: self.yuv.filter(|_| standard_range.is_none()),
+            check: false,
+            frames: None,
         }
     }
 
@@ -307,8 +318,14 @@ impl InputInfo {
                 if let Some((w, h)) = req.size {
                     (info.width, info.height) = (w, h);
                 }
+                // Scaled frames come as ffmpeg scales them, in rgb24.
+                let req = match req.size {
+                    Some(_) => Request { yuv: None, ..req },
+                    None => self.yuv_verdict.settle(req),
+                };
+                let decoder = VideoDecoder::spawn(&self.path, req, self.yuv_verdict.clone())?;
                 let inner = FrameReader {
-                    source: Source::Video(VideoDecoder::spawn(&self.path, req)?),
+                    source: Source::Video(Box::new(decoder)),
                     info,
                     next: req.from,
                 };
@@ -327,7 +344,7 @@ impl InputInfo {
     pub fn replay(&self, recording: DecoderRecording) -> FrameReader {
         FrameReader {
             info: self.clone(),
-            source: Source::Video(VideoDecoder::replay(&self.path, recording)),
+            source: Source::Video(Box::new(VideoDecoder::replay(&self.path, recording))),
             next: 0,
         }
     }

@@ -36,6 +36,7 @@ mod subject;
 pub mod timings;
 mod tracker;
 mod video_decoder;
+mod yuv;
 
 pub use beside::RunBeside;
 pub use cache::{entry_bytes as cache_entry_bytes, read_entry as read_cache_entry};

@@ -16,6 +16,7 @@ pub fn ffprobe_command(path: &Path) -> Command {
     cmd.args(["-v", "error", "-select_streams", "V", "-show_entries"])
         .arg(concat!(
             "stream=index,codec_type,width,height,r_frame_rate,nb_frames,color_transfer,field_order",
+            ",pix_fmt,color_space,color_range",
             ":stream_disposition=attached_pic:stream_side_data=rotation",
             ":packet=stream_index,pts_time"
         ))
@@ -140,6 +141,12 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
             decode_warnings.add(w);
         }
     }
+    let yuv = crate::yuv::Yuv420::of_stream(
+        stream["pix_fmt"].as_str(),
+        stream["color_space"].as_str(),
+        stream["color_range"].as_str(),
+        (width, height),
+    );
     Ok(InputInfo {
         path: path.to_path_buf(),
         width,
@@ -154,6 +161,8 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         kind: Kind::Video,
         decode_warnings,
         reading: ReadClock::default(),
+        yuv,
+        yuv_verdict: Default::default(),
     })
 }
 

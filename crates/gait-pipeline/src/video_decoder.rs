@@ -14,6 +14,7 @@ use std::process::{Child, Command, Stdio};
 use std::thread::JoinHandle;
 
 use crate::PipelineError;
+use crate::yuv::{Yuv420, YuvVerdict};
 
 /// ffmpeg's messages kept for the error (the first line is what the user sees).
 const MAX_MESSAGES: usize = 64 * 1024;
@@ -49,20 +50,28 @@ pub(crate) struct Request {
     pub standard_range: Option<&'static str>,
     /// The filter that deinterlaces an interlaced video first (picture.rs).
     pub deinterlace: Option<&'static str>,
+    /// Frames sent as yuv420p and converted here (yuv.rs), not as rgb24.
+    pub yuv: Option<Yuv420>,
+    /// With `yuv`: the first frame checked against ffmpeg's rgb24 of it (decoded by another
+    /// ffmpeg at the same time).
+    pub check: bool,
+    /// Only this many frames (that other ffmpeg's one).
+    pub frames: Option<usize>,
 }
 
-/// The ffmpeg command that decodes `path` to rgb24 frames on its standard output, as `req`
-/// asks. Fast bilinear scaling for the overlay costs 0.7 CPU s less than bicubic on the
-/// sample (BENCHMARKS.md) and no measure is taken from those frames.
+/// The ffmpeg command that decodes `path` to raw frames on its standard output (rgb24, or
+/// yuv420p where `req.yuv` says), as `req` asks. Fast bilinear scaling for the overlay costs
+/// 0.7 CPU s less than bicubic on the sample (BENCHMARKS.md) and no measure is taken from
+/// those frames.
 fn ffmpeg_command(path: &Path, req: Request) -> Command {
     let mut cmd = Command::new("ffmpeg");
     // One decoding thread: the passes wait on the model, not on ffmpeg, and frame threads cost
     // CPU to coordinate (the sample's VP9 decode: 1.5 CPU s on one thread, 1.75 on two, at
     // about the same wall time); the frames are the same bits.
     cmd.args(["-v", "error", "-nostdin", "-threads", "1", "-i"])
-        .arg(path)
-        // The stream ffprobe described (input.rs), so the frames have the size it said.
-        .arg("-map")
+        .arg(path);
+    // The stream ffprobe described (input.rs), so the frames have the size it said.
+    cmd.arg("-map")
         .arg(req.stream.map_or("0:V:0".to_string(), |i| format!("0:{i}")));
     let mut filters = Vec::new();
     // Fields are woven back into frames before anything else looks at the pictures.
@@ -86,7 +95,15 @@ fn ffmpeg_command(path: &Path, req: Request) -> Command {
     // 23 ms a .mkv's audio starts before its video, and a pass that starts later (`from`)
     // would then number the same frame one lower.
     cmd.args(["-fps_mode", "passthrough"]);
-    cmd.args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]);
+    if let Some(n) = req.frames {
+        cmd.arg("-frames:v").arg(n.to_string());
+    }
+    let pix_fmt = if req.yuv.is_some() {
+        "yuv420p"
+    } else {
+        "rgb24"
+    };
+    cmd.args(["-f", "rawvideo", "-pix_fmt", pix_fmt, "-"]);
     cmd
 }
 
@@ -178,6 +195,16 @@ impl FrameSource for Ffmpeg {
     }
 }
 
+impl Drop for VideoDecoder {
+    /// A check left pending (the reader stopped at an error) is not left running.
+    fn drop(&mut self) {
+        if let Some(mut check) = self.check.take() {
+            let _ = check.kill();
+            let _ = check.wait();
+        }
+    }
+}
+
 impl Drop for Ffmpeg {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -227,14 +254,44 @@ impl FrameSource for Playback {
 pub(crate) struct VideoDecoder {
     path: PathBuf,
     source: Box<dyn FrameSource>,
+    /// What ffmpeg was asked for (asked again as rgb24 when the check fails).
+    req: Request,
+    /// The ffmpeg decoding the first frame as rgb24 for the check, while it is pending.
+    check: Option<Child>,
+    /// Where the check's outcome is kept for the input's other readers.
+    verdict: YuvVerdict,
+    /// A yuv420p frame's buffer, reused.
+    planes: Vec<u8>,
 }
 
 impl VideoDecoder {
-    /// Decodes `path` as `req` asks.
-    pub(crate) fn spawn(path: &Path, req: Request) -> Result<Self, PipelineError> {
+    /// Decodes `path` as `req` asks; the outcome of a yuv check goes to `verdict`.
+    pub(crate) fn spawn(
+        path: &Path,
+        req: Request,
+        verdict: YuvVerdict,
+    ) -> Result<Self, PipelineError> {
+        let source = Box::new(Ffmpeg::spawn(path, req)?);
+        let check = (req.check && req.yuv.is_some()).then(|| {
+            let first = Request {
+                yuv: None,
+                frames: Some(1),
+                ..req
+            };
+            ffmpeg_command(path, first)
+                .stdin(Stdio::null())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::null())
+                .spawn()
+        });
         Ok(VideoDecoder {
             path: path.to_path_buf(),
-            source: Box::new(Ffmpeg::spawn(path, req)?),
+            source,
+            req,
+            // A check that cannot start fails, and the frames come as rgb24.
+            check: check.map(Result::ok).unwrap_or(None),
+            verdict,
+            planes: Vec::new(),
         })
     }
 
@@ -250,17 +307,84 @@ impl VideoDecoder {
         VideoDecoder {
             path: path.to_path_buf(),
             source: Box::new(playback),
+            req: Request::default(),
+            check: None,
+            verdict: YuvVerdict::default(),
+            planes: Vec::new(),
         }
     }
 
-    /// Appends the next frame, `len` bytes, to `buf`: the bytes read (0 at the end of the
-    /// output). Read into the vector's spare capacity, so a frame buffer is not zeroed first
-    /// only to be overwritten (a full-HD frame is 6 MB, 230 of them a memset of 1.4 GB).
+    /// Appends the next `width` x `height` frame to `buf` as rgb24: the bytes read (0 at the
+    /// end of the output; fewer than a frame's when it was cut short).
     pub(crate) fn read_frame(
         &mut self,
         buf: &mut Vec<u8>,
-        len: usize,
+        size: (usize, usize),
     ) -> Result<usize, PipelineError> {
+        match self.req.yuv {
+            None => self.read_bytes(buf, size.0 * size.1 * 3),
+            Some(_) if self.req.check => self.read_checked(buf, size),
+            Some(yuv) => self.read_yuv(yuv, buf, size),
+        }
+    }
+
+    /// The first frame converted here, kept when it is the other ffmpeg's rgb24 of it; else
+    /// ffmpeg's, from a decoder started again without the yuv420p frames.
+    fn read_checked(
+        &mut self,
+        buf: &mut Vec<u8>,
+        size: (usize, usize),
+    ) -> Result<usize, PipelineError> {
+        self.req.check = false;
+        let start = buf.len();
+        let read = match self.req.yuv {
+            Some(yuv) => self.read_yuv(yuv, buf, size)?,
+            None => 0,
+        };
+        let theirs = self
+            .check
+            .take()
+            .and_then(|c| c.wait_with_output().ok())
+            .filter(|out| out.status.success())
+            .map(|out| out.stdout);
+        if read == 0 && theirs.as_ref().is_none_or(Vec::is_empty) {
+            // No frame either way: the end (or the decoder's error) comes from `finish`.
+            return Ok(0);
+        }
+        let agrees = read == size.0 * size.1 * 3 && theirs.as_deref() == Some(&buf[start..]);
+        self.verdict.record(agrees);
+        if agrees {
+            return Ok(read);
+        }
+        buf.truncate(start);
+        self.req.yuv = None;
+        self.source = Box::new(Ffmpeg::spawn(&self.path, self.req)?);
+        self.read_bytes(buf, size.0 * size.1 * 3)
+    }
+
+    /// A yuv420p frame converted to rgb24 into `buf`: as [`Self::read_frame`].
+    fn read_yuv(
+        &mut self,
+        yuv: Yuv420,
+        buf: &mut Vec<u8>,
+        (width, height): (usize, usize),
+    ) -> Result<usize, PipelineError> {
+        let mut planes = std::mem::take(&mut self.planes);
+        planes.clear();
+        let len = Yuv420::frame_len(width, height);
+        let read = self.read_bytes(&mut planes, len);
+        if matches!(read, Ok(n) if n == len) {
+            yuv.convert(&planes, width, height, buf);
+        }
+        self.planes = planes;
+        let n = read?;
+        Ok(if n == len { width * height * 3 } else { n })
+    }
+
+    /// Appends `len` bytes of ffmpeg's output to `buf`: the bytes read. Read into the vector's
+    /// spare capacity, so a frame buffer is not zeroed first only to be overwritten (a full-HD
+    /// frame is 6 MB, 230 of them a memset of 1.4 GB).
+    fn read_bytes(&mut self, buf: &mut Vec<u8>, len: usize) -> Result<usize, PipelineError> {
         let output = self
             .source
             .output()
@@ -296,155 +420,4 @@ impl VideoDecoder {
 }
 
 #[cfg(test)]
-mod tests {
-    use std::sync::mpsc;
-    use std::time::Duration;
-
-    use crate::input::InputInfo;
-
-    /// A 100 s MJPEG clip with every 128th byte after the header flipped: ffmpeg reports
-    /// about 150 KB of decoding errors, more than a pipe holds.
-    fn damaged_video(dir: &std::path::Path) -> std::path::PathBuf {
-        let clean = dir.join("clean.avi");
-        let status = std::process::Command::new("ffmpeg")
-            .args([
-                "-v",
-                "error",
-                "-y",
-                "-f",
-                "lavfi",
-                "-i",
-                "testsrc=size=64x48:rate=30",
-            ])
-            .args(["-t", "100", "-c:v", "mjpeg"])
-            .arg(&clean)
-            .status()
-            .expect("ffmpeg (tools/setup.sh installs it)");
-        assert!(status.success());
-        let mut bytes = std::fs::read(&clean).unwrap();
-        for b in bytes.iter_mut().skip(4096).step_by(128) {
-            *b ^= 0xff;
-        }
-        let damaged = dir.join("damaged.avi");
-        std::fs::write(&damaged, bytes).unwrap();
-        damaged
-    }
-
-    /// The reader over a recorded run of a 4x2 video (24 bytes a frame).
-    fn replay(frames: Vec<u8>, success: bool, messages: &str) -> Vec<Result<usize, String>> {
-        let probe = br#"{"streams": [{"width": 4, "height": 2, "r_frame_rate": "30/1"}]}"#;
-        let info = crate::input::parse_ffprobe(std::path::Path::new("clip.mp4"), probe).unwrap();
-        let mut reader = info.replay(super::DecoderRecording {
-            frames,
-            success,
-            messages: messages.to_string(),
-        });
-        let mut seen = Vec::new();
-        loop {
-            match reader.next_frame() {
-                Ok(Some(f)) => seen.push(Ok(f.index)),
-                Ok(None) => return seen,
-                Err(e) => {
-                    seen.push(Err(e.to_string()));
-                    return seen;
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn recorded_runs_end_as_ffmpeg_ended() {
-        assert_eq!(replay(vec![7; 48], true, ""), vec![Ok(0), Ok(1)]);
-        // Frames then a failure: the failure is reported with ffmpeg's first message line.
-        let end = replay(vec![7; 24], false, "\n[h264] broken slice\nmore\n");
-        assert_eq!(end[0], Ok(0));
-        let err = end[1].clone().unwrap_err();
-        assert!(
-            err.contains("cannot decode the video: [h264] broken slice"),
-            "{err}"
-        );
-        let err = replay(vec![7; 30], true, "")[1].clone().unwrap_err();
-        assert!(err.contains("frame 1 is truncated"), "{err}");
-        let err = replay(Vec::new(), true, "")[0].clone().unwrap_err();
-        assert!(err.contains("the video has no frames"), "{err}");
-        let err = replay(Vec::new(), true, "moov atom not found")[0]
-            .clone()
-            .unwrap_err();
-        assert!(err.contains("moov atom not found"), "{err}");
-    }
-
-    /// A clean clip of `seconds` at 30 fps, 64 x 48 (H.264).
-    fn clip(dir: &std::path::Path, seconds: u32) -> std::path::PathBuf {
-        let path = dir.join("clip.mp4");
-        let status = std::process::Command::new("ffmpeg")
-            .args(["-v", "error", "-y", "-f", "lavfi", "-i"])
-            .arg(format!("testsrc=size=64x48:rate=30:duration={seconds}"))
-            .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
-            .arg(&path)
-            .status()
-            .expect("ffmpeg (tools/setup.sh installs it)");
-        assert!(status.success());
-        path
-    }
-
-    #[test]
-    fn frames_over_the_socket_are_the_bytes_ffmpeg_writes() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = clip(dir.path(), 2);
-        // ffmpeg's standard output collected whole (a pipe), against the reader (a socket).
-        let recorded = super::DecoderRecording::record(&path).unwrap();
-        assert!(recorded.success && recorded.frames.len() == 60 * 64 * 48 * 3);
-        let mut frames = InputInfo::open(&path).unwrap().frames().unwrap();
-        let mut read = Vec::new();
-        while let Some(f) = frames.next_frame().unwrap() {
-            read.extend_from_slice(f.image.as_raw());
-        }
-        assert!(read == recorded.frames);
-    }
-
-    #[test]
-    fn a_reader_left_early_ends_its_decoder() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = clip(dir.path(), 100);
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            let mut frames = InputInfo::open(&path).unwrap().frames().unwrap();
-            let first = frames.next_frame().unwrap().map(|f| f.index);
-            drop(frames);
-            let _ = tx.send(first);
-        });
-        // ffmpeg, with 3000 frames still to write, is stopped when the reader goes.
-        let first = rx
-            .recv_timeout(Duration::from_secs(600))
-            .expect("leaving a decoder early hung");
-        assert_eq!(first, Some(0));
-    }
-
-    #[test]
-    fn a_damaged_video_full_of_decoder_errors_ends() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = damaged_video(dir.path());
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            let info = InputInfo::open(&path).unwrap();
-            let mut frames = info.frames().unwrap();
-            let mut n = 0;
-            let end = loop {
-                match frames.next_frame() {
-                    Ok(Some(_)) => n += 1,
-                    other => break other.map(|_| n),
-                }
-            };
-            let _ = tx.send(end);
-        });
-        // Not a speed check: before the messages were read on their own thread this never
-        // returned (ffmpeg and gait each waiting on the other's pipe).
-        let end = rx
-            .recv_timeout(Duration::from_secs(600))
-            .expect("decoding a damaged video hung");
-        match end {
-            Ok(n) => assert!(n > 0),
-            Err(e) => assert!(e.to_string().contains("damaged.avi"), "{e}"),
-        }
-    }
-}
+mod tests;
