@@ -9,6 +9,7 @@
 //! ffmpeg that converts otherwise (another version, swscale's plain-C converter on a CPU
 //! without its SIMD code) costs the saving, never the results: its frames come as rgb24.
 
+use std::mem::MaybeUninit;
 use std::sync::{Arc, OnceLock};
 
 use crate::video_decoder::Request;
@@ -87,15 +88,25 @@ impl Yuv420 {
         let (cw, ch) = (width.div_ceil(2), height.div_ceil(2));
         let (luma, chroma) = src.split_at(width * height);
         let (u_plane, v_plane) = chroma.split_at(cw * ch);
-        out.reserve(width * height * 3);
+        let len = width * height * 3;
+        out.reserve(len);
+        // Written in place, not zeroed first nor copied: a frame is megabytes.
+        let dst = &mut out.spare_capacity_mut()[..len];
         let mut terms = [vec![0i32; cw], vec![0i32; cw], vec![0i32; cw]];
         let rows = u_plane
             .chunks_exact(cw)
             .zip(v_plane.chunks_exact(cw))
-            .zip(luma.chunks(2 * width));
-        for ((u_row, v_row), luma) in rows {
-            two_rows(self, [u_row, v_row], luma, &mut terms, out);
+            .zip(luma.chunks(2 * width))
+            .zip(dst.chunks_mut(2 * width * 3));
+        let mut written = 0;
+        for (((u_row, v_row), luma), dst) in rows {
+            two_rows(self, [u_row, v_row], luma, &mut terms, dst);
+            written += dst.len();
         }
+        assert_eq!(written, len, "every row converted");
+        // SAFETY: the rows above cover `dst` whole (counted), and `rows_of` writes every byte
+        // of its rows (whole blocks, then the rest pixel by pixel).
+        unsafe { out.set_len(out.len() + len) };
     }
 }
 
@@ -134,7 +145,13 @@ impl YuvVerdict {
 
 /// [`rows_of`] in the widest registers the CPU has (the same integer operations: the same
 /// bytes).
-fn two_rows(c: &Yuv420, uv: [&[u8]; 2], luma: &[u8], terms: &mut Terms, out: &mut Vec<u8>) {
+fn two_rows(
+    c: &Yuv420,
+    uv: [&[u8]; 2],
+    luma: &[u8],
+    terms: &mut Terms,
+    out: &mut [MaybeUninit<u8>],
+) {
     #[cfg(target_arch = "x86_64")]
     if is_x86_feature_detected!("avx512bw") {
         // SAFETY: the CPU has the features the function is compiled for.
@@ -150,13 +167,25 @@ fn two_rows(c: &Yuv420, uv: [&[u8]; 2], luma: &[u8], terms: &mut Terms, out: &mu
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512bw")]
-unsafe fn rows_avx512(c: &Yuv420, uv: [&[u8]; 2], luma: &[u8], t: &mut Terms, out: &mut Vec<u8>) {
+unsafe fn rows_avx512(
+    c: &Yuv420,
+    uv: [&[u8]; 2],
+    luma: &[u8],
+    t: &mut Terms,
+    out: &mut [MaybeUninit<u8>],
+) {
     rows_of(c, uv, luma, t, out)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn rows_avx2(c: &Yuv420, uv: [&[u8]; 2], luma: &[u8], t: &mut Terms, out: &mut Vec<u8>) {
+unsafe fn rows_avx2(
+    c: &Yuv420,
+    uv: [&[u8]; 2],
+    luma: &[u8],
+    t: &mut Terms,
+    out: &mut [MaybeUninit<u8>],
+) {
     rows_of(c, uv, luma, t, out)
 }
 
@@ -168,10 +197,16 @@ const BLOCK: usize = 64;
 
 /// The one or two luma rows (`luma`, into `out`) that share the chroma row `uv`.
 #[inline(always)]
-fn rows_of(c: &Yuv420, [u_row, v_row]: [&[u8]; 2], luma: &[u8], t: &mut Terms, out: &mut Vec<u8>) {
+fn rows_of(
+    c: &Yuv420,
+    [u_row, v_row]: [&[u8]; 2],
+    luma: &[u8],
+    t: &mut Terms,
+    out: &mut [MaybeUninit<u8>],
+) {
     chroma_terms(c, u_row, v_row, t);
     let width = luma.len().min(2 * u_row.len());
-    for luma in luma.chunks(width) {
+    for (luma, out) in luma.chunks(width).zip(out.chunks_mut(3 * width)) {
         row(c, luma, t, out);
     }
 }
@@ -207,15 +242,18 @@ fn chroma_terms(c: &Yuv420, u_row: &[u8], v_row: &[u8], [red, green, blue]: &mut
     }
 }
 
-/// One row of pixels appended to `out`: the luma term plus the chroma terms, clamped to 8
-/// bits. Whole blocks go through fixed-size loops the compiler vectorises, into a buffer on
-/// the stack and then `out` (no zeroed frame first), the rest pixel by pixel. The sums stay
+/// One row of pixels: the luma term plus the chroma terms, clamped to 8 bits, every byte of
+/// `out` written. Whole blocks go through fixed-size loops the compiler vectorises, the rest
+/// pixel by pixel. The sums stay
 /// far inside 16 bits for 8-bit input, so swscale's saturating adds never saturate.
 #[inline(always)]
-fn row(c: &Yuv420, luma: &[u8], terms: &Terms, out: &mut Vec<u8>) {
+fn row(c: &Yuv420, luma: &[u8], terms: &Terms, out: &mut [MaybeUninit<u8>]) {
     let whole = luma.len() / BLOCK * BLOCK;
-    let mut rgb = [0u8; 3 * BLOCK];
-    for (k, luma) in luma[..whole].chunks_exact(BLOCK).enumerate() {
+    let (blocks, rest) = out.split_at_mut(3 * whole);
+    let chunks = luma
+        .chunks_exact(BLOCK)
+        .zip(blocks.chunks_exact_mut(3 * BLOCK));
+    for (k, (luma, out)) in chunks.enumerate() {
         let half = k * BLOCK / 2..(k + 1) * BLOCK / 2;
         block(
             c,
@@ -223,16 +261,19 @@ fn row(c: &Yuv420, luma: &[u8], terms: &Terms, out: &mut Vec<u8>) {
             terms
                 .each_ref()
                 .map(|t| t[half.clone()].try_into().expect("a block")),
-            &mut rgb,
+            out.try_into().expect("a block"),
         );
-        out.extend_from_slice(&rgb);
     }
-    for (i, &y) in luma.iter().enumerate().skip(whole) {
+    for ((i, &y), px) in luma
+        .iter()
+        .enumerate()
+        .skip(whole)
+        .zip(rest.chunks_exact_mut(3))
+    {
         let y = luma_term(c, y);
-        let px = terms
-            .each_ref()
-            .map(|t| y.wrapping_add(t[i / 2]).clamp(0, 255) as u8);
-        out.extend_from_slice(&px);
+        for (v, t) in px.iter_mut().zip(terms) {
+            v.write(y.wrapping_add(t[i / 2]).clamp(0, 255) as u8);
+        }
     }
 }
 
@@ -242,7 +283,12 @@ fn luma_term(c: &Yuv420, y: u8) -> i32 {
 }
 
 #[inline(always)]
-fn block(c: &Yuv420, luma: &[u8; BLOCK], terms: [&[i32; BLOCK / 2]; 3], out: &mut [u8; 3 * BLOCK]) {
+fn block(
+    c: &Yuv420,
+    luma: &[u8; BLOCK],
+    terms: [&[i32; BLOCK / 2]; 3],
+    out: &mut [MaybeUninit<u8>; 3 * BLOCK],
+) {
     let mut y = [0i32; BLOCK];
     for i in 0..BLOCK {
         y[i] = luma_term(c, luma[i]);
@@ -256,9 +302,9 @@ fn block(c: &Yuv420, luma: &[u8; BLOCK], terms: [&[i32; BLOCK / 2]; 3], out: &mu
     }
     let [r, g, b] = &planes;
     for i in 0..BLOCK {
-        out[3 * i] = r[i];
-        out[3 * i + 1] = g[i];
-        out[3 * i + 2] = b[i];
+        out[3 * i].write(r[i]);
+        out[3 * i + 1].write(g[i]);
+        out[3 * i + 2].write(b[i]);
     }
 }
 
