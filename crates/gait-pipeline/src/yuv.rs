@@ -100,8 +100,9 @@ impl Yuv420 {
             .zip(dst.chunks_mut(2 * width * 3));
         let mut written = 0;
         for (((u_row, v_row), luma), dst) in rows {
-            two_rows(self, [u_row, v_row], luma, &mut terms, dst);
             written += dst.len();
+            let uv = [u_row, v_row];
+            two_rows(self, RowPair { uv, luma, out: dst }, &mut terms);
         }
         assert_eq!(written, len, "every row converted");
         // SAFETY: the rows above cover `dst` whole (counted), and `rows_of` writes every byte
@@ -143,50 +144,39 @@ impl YuvVerdict {
     }
 }
 
+/// One chroma row (U and V) and the one or two luma rows that share it, with their output.
+struct RowPair<'a> {
+    uv: [&'a [u8]; 2],
+    luma: &'a [u8],
+    out: &'a mut [MaybeUninit<u8>],
+}
+
 /// [`rows_of`] in the widest registers the CPU has (the same integer operations: the same
 /// bytes).
-fn two_rows(
-    c: &Yuv420,
-    uv: [&[u8]; 2],
-    luma: &[u8],
-    terms: &mut Terms,
-    out: &mut [MaybeUninit<u8>],
-) {
+fn two_rows(c: &Yuv420, rows: RowPair, terms: &mut Terms) {
     #[cfg(target_arch = "x86_64")]
     if is_x86_feature_detected!("avx512bw") {
         // SAFETY: the CPU has the features the function is compiled for.
-        return unsafe { rows_avx512(c, uv, luma, terms, out) };
+        return unsafe { rows_avx512(c, rows, terms) };
     }
     #[cfg(target_arch = "x86_64")]
     if is_x86_feature_detected!("avx2") {
         // SAFETY: as above.
-        return unsafe { rows_avx2(c, uv, luma, terms, out) };
+        return unsafe { rows_avx2(c, rows, terms) };
     }
-    rows_of(c, uv, luma, terms, out)
+    rows_of(c, rows, terms)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512bw")]
-unsafe fn rows_avx512(
-    c: &Yuv420,
-    uv: [&[u8]; 2],
-    luma: &[u8],
-    t: &mut Terms,
-    out: &mut [MaybeUninit<u8>],
-) {
-    rows_of(c, uv, luma, t, out)
+unsafe fn rows_avx512(c: &Yuv420, rows: RowPair, terms: &mut Terms) {
+    rows_of(c, rows, terms)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn rows_avx2(
-    c: &Yuv420,
-    uv: [&[u8]; 2],
-    luma: &[u8],
-    t: &mut Terms,
-    out: &mut [MaybeUninit<u8>],
-) {
-    rows_of(c, uv, luma, t, out)
+unsafe fn rows_avx2(c: &Yuv420, rows: RowPair, terms: &mut Terms) {
+    rows_of(c, rows, terms)
 }
 
 /// A chroma row's red, green and blue terms, one per chroma sample.
@@ -197,13 +187,8 @@ const BLOCK: usize = 64;
 
 /// The one or two luma rows (`luma`, into `out`) that share the chroma row `uv`.
 #[inline(always)]
-fn rows_of(
-    c: &Yuv420,
-    [u_row, v_row]: [&[u8]; 2],
-    luma: &[u8],
-    t: &mut Terms,
-    out: &mut [MaybeUninit<u8>],
-) {
+fn rows_of(c: &Yuv420, RowPair { uv, luma, out }: RowPair, t: &mut Terms) {
+    let [u_row, v_row] = uv;
     chroma_terms(c, u_row, v_row, t);
     let width = luma.len().min(2 * u_row.len());
     for (luma, out) in luma.chunks(width).zip(out.chunks_mut(3 * width)) {
