@@ -195,16 +195,6 @@ impl FrameSource for Ffmpeg {
     }
 }
 
-impl Drop for VideoDecoder {
-    /// A check left pending (the reader stopped at an error) is not left running.
-    fn drop(&mut self) {
-        if let Some(mut check) = self.check.take() {
-            let _ = check.kill();
-            let _ = check.wait();
-        }
-    }
-}
-
 impl Drop for Ffmpeg {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -289,7 +279,7 @@ impl VideoDecoder {
             source,
             req,
             // A check that cannot start fails, and the frames come as rgb24.
-            check: check.map(Result::ok).unwrap_or(None),
+            check: check.and_then(Result::ok),
             verdict,
             planes: Vec::new(),
         })
@@ -416,6 +406,16 @@ impl VideoDecoder {
             return Err(PipelineError::input(&self.path, "the video has no frames"));
         }
         Ok(())
+    }
+}
+
+impl Drop for VideoDecoder {
+    /// A check left pending (the reader stopped at an error) is not left running.
+    fn drop(&mut self) {
+        if let Some(mut check) = self.check.take() {
+            let _ = check.kill();
+            let _ = check.wait();
+        }
     }
 }
 
