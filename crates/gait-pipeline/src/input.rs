@@ -58,7 +58,7 @@ pub struct InputInfo {
     /// How a 4:2:0 video's frames become RGB here rather than in ffmpeg (yuv.rs), when they can.
     pub(crate) yuv: Option<crate::yuv::Yuv420>,
     /// Whether ffmpeg converts this input's frames as yuv.rs does (shared by the readers).
-    pub(crate) yuv_verdict: crate::yuv::YuvVerdict,
+    pub(crate) yuv_verdict: crate::video_decoder::YuvVerdict,
 }
 
 /// Nanoseconds spent in [`FrameReader::next_frame`], over every reader of one input.

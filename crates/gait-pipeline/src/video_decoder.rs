@@ -11,10 +11,11 @@
 use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, OnceLock};
 use std::thread::JoinHandle;
 
 use crate::PipelineError;
-use crate::yuv::{Yuv420, YuvVerdict};
+use crate::yuv::Yuv420;
 
 /// ffmpeg's messages kept for the error (the first line is what the user sees).
 const MAX_MESSAGES: usize = 64 * 1024;
@@ -57,6 +58,39 @@ pub(crate) struct Request {
     pub check: bool,
     /// Only this many frames (that other ffmpeg's one).
     pub frames: Option<usize>,
+}
+
+/// Whether ffmpeg converts one input's frames as yuv.rs does, once its first frame was
+/// compared; shared by the input's readers.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct YuvVerdict(Arc<OnceLock<bool>>);
+
+impl PartialEq for YuvVerdict {
+    /// Whether the check has run does not make two inputs different.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl YuvVerdict {
+    /// `req` with its yuv420p frames checked (not known yet), kept (they agreed) or dropped.
+    pub(crate) fn settle(&self, req: Request) -> Request {
+        match self.0.get() {
+            None => Request { check: true, ..req },
+            Some(true) => req,
+            Some(false) => Request { yuv: None, ..req },
+        }
+    }
+
+    pub(crate) fn record(&self, agrees: bool) {
+        let _ = self.0.set(agrees);
+    }
+
+    /// The outcome of the check, when it has run.
+    #[cfg(test)]
+    pub(crate) fn agreed(&self) -> Option<bool> {
+        self.0.get().copied()
+    }
 }
 
 /// The ffmpeg command that decodes `path` to raw frames on its standard output (rgb24, or

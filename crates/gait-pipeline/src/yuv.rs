@@ -10,9 +10,6 @@
 //! without its SIMD code) costs the saving, never the results: its frames come as rgb24.
 
 use std::mem::MaybeUninit;
-use std::sync::{Arc, OnceLock};
-
-use crate::video_decoder::Request;
 
 /// The fixed-point coefficients of one colour matrix and range, as swscale derives them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -89,94 +86,86 @@ impl Yuv420 {
         let (luma, chroma) = src.split_at(width * height);
         let (u_plane, v_plane) = chroma.split_at(cw * ch);
         let len = width * height * 3;
-        out.reserve(len);
         // Written in place, not zeroed first nor copied: a frame is megabytes.
-        let dst = &mut out.spare_capacity_mut()[..len];
-        let mut terms = [vec![0i32; cw], vec![0i32; cw], vec![0i32; cw]];
-        let rows = u_plane
-            .chunks_exact(cw)
-            .zip(v_plane.chunks_exact(cw))
-            .zip(luma.chunks(2 * width))
-            .zip(dst.chunks_mut(2 * width * 3));
-        let mut written = 0;
-        for (((u_row, v_row), luma), dst) in rows {
-            written += dst.len();
-            let uv = [u_row, v_row];
-            two_rows(self, RowPair { uv, luma, out: dst }, &mut terms);
-        }
-        assert_eq!(written, len, "every row converted");
-        // SAFETY: the rows above cover `dst` whole (counted), and `rows_of` writes every byte
-        // of its rows (whole blocks, then the rest pixel by pixel).
+        out.reserve(len);
+        let frame = Frame {
+            luma,
+            u_plane,
+            v_plane,
+            width,
+            out: &mut out.spare_capacity_mut()[..len],
+        };
+        // The rows cover the output whole (asserted), and `rows_of` writes every byte of its
+        // rows (whole blocks, then the rest pixel by pixel).
+        assert_eq!(rows(self, frame), len, "every row converted");
+        // SAFETY: the `len` bytes after the vector's length were written just above.
         unsafe { out.set_len(out.len() + len) };
     }
 }
 
-/// Whether ffmpeg converts one input's frames as [`Yuv420`] does, once its first frame was
-/// compared; shared by the input's readers.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct YuvVerdict(Arc<OnceLock<bool>>);
-
-impl PartialEq for YuvVerdict {
-    /// Whether the check has run does not make two inputs different.
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-impl YuvVerdict {
-    /// `req` with its yuv420p frames checked (not known yet), kept (they agreed) or dropped.
-    pub(crate) fn settle(&self, req: Request) -> Request {
-        match self.0.get() {
-            None => Request { check: true, ..req },
-            Some(true) => req,
-            Some(false) => Request { yuv: None, ..req },
-        }
-    }
-
-    pub(crate) fn record(&self, agrees: bool) {
-        let _ = self.0.set(agrees);
-    }
-
-    /// The outcome of the check, when it has run.
-    #[cfg(test)]
-    pub(crate) fn agreed(&self) -> Option<bool> {
-        self.0.get().copied()
-    }
-}
-
-/// One chroma row (U and V) and the one or two luma rows that share it, with their output.
-struct RowPair<'a> {
-    uv: [&'a [u8]; 2],
+/// One yuv420p frame's planes and the rgb24 output it is written to, not yet initialised.
+struct Frame<'a> {
     luma: &'a [u8],
+    u_plane: &'a [u8],
+    v_plane: &'a [u8],
+    width: usize,
     out: &'a mut [MaybeUninit<u8>],
 }
 
 /// [`rows_of`] in the widest registers the CPU has (the same integer operations: the same
-/// bytes).
-fn two_rows(c: &Yuv420, rows: RowPair, terms: &mut Terms) {
+/// bytes): the bytes written.
+fn rows(c: &Yuv420, frame: Frame) -> usize {
     #[cfg(target_arch = "x86_64")]
     if is_x86_feature_detected!("avx512bw") {
         // SAFETY: the CPU has the features the function is compiled for.
-        return unsafe { rows_avx512(c, rows, terms) };
+        return unsafe { rows_avx512(c, frame) };
     }
     #[cfg(target_arch = "x86_64")]
     if is_x86_feature_detected!("avx2") {
         // SAFETY: as above.
-        return unsafe { rows_avx2(c, rows, terms) };
+        return unsafe { rows_avx2(c, frame) };
     }
-    rows_of(c, rows, terms)
+    rows_of(c, frame)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512bw")]
-unsafe fn rows_avx512(c: &Yuv420, rows: RowPair, terms: &mut Terms) {
-    rows_of(c, rows, terms)
+unsafe fn rows_avx512(c: &Yuv420, frame: Frame) -> usize {
+    rows_of(c, frame)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn rows_avx2(c: &Yuv420, rows: RowPair, terms: &mut Terms) {
-    rows_of(c, rows, terms)
+unsafe fn rows_avx2(c: &Yuv420, frame: Frame) -> usize {
+    rows_of(c, frame)
+}
+
+/// Every row of `frame`, two luma rows per chroma row: the bytes written.
+#[inline(always)]
+fn rows_of(c: &Yuv420, frame: Frame) -> usize {
+    let Frame {
+        luma,
+        u_plane,
+        v_plane,
+        width,
+        out,
+    } = frame;
+    let cw = width.div_ceil(2);
+    let mut terms = [vec![0i32; cw], vec![0i32; cw], vec![0i32; cw]];
+    let pairs = u_plane
+        .chunks_exact(cw)
+        .zip(v_plane.chunks_exact(cw))
+        .zip(luma.chunks(2 * width))
+        .zip(out.chunks_mut(2 * width * 3));
+    let mut written = 0;
+    for (((u_row, v_row), luma), out) in pairs {
+        chroma_terms(c, u_row, v_row, &mut terms);
+        for (luma, out) in luma.chunks(width).zip(out.chunks_mut(3 * width)) {
+            row(c, luma, &terms, out);
+        }
+        written += out.len();
+    }
+    written
 }
 
 /// A chroma row's red, green and blue terms, one per chroma sample.
@@ -184,17 +173,6 @@ type Terms = [Vec<i32>; 3];
 
 /// Pixels in a block of [`row`]: its planes stay in the first-level cache.
 const BLOCK: usize = 64;
-
-/// The one or two luma rows (`luma`, into `out`) that share the chroma row `uv`.
-#[inline(always)]
-fn rows_of(c: &Yuv420, RowPair { uv, luma, out }: RowPair, t: &mut Terms) {
-    let [u_row, v_row] = uv;
-    chroma_terms(c, u_row, v_row, t);
-    let width = luma.len().min(2 * u_row.len());
-    for (luma, out) in luma.chunks(width).zip(out.chunks_mut(3 * width)) {
-        row(c, luma, t, out);
-    }
-}
 
 /// Each chroma sample's red, green and blue terms; in fixed-size chunks, the rest one by one.
 #[inline(always)]
@@ -227,10 +205,8 @@ fn chroma_terms(c: &Yuv420, u_row: &[u8], v_row: &[u8], [red, green, blue]: &mut
     }
 }
 
-/// One row of pixels: the luma term plus the chroma terms, clamped to 8 bits, every byte of
-/// `out` written. Whole blocks go through fixed-size loops the compiler vectorises, the rest
-/// pixel by pixel. The sums stay
-/// far inside 16 bits for 8-bit input, so swscale's saturating adds never saturate.
+/// One row of pixels, every byte of `out` written: whole blocks through fixed-size loops the
+/// compiler vectorises, the rest pixel by pixel.
 #[inline(always)]
 fn row(c: &Yuv420, luma: &[u8], terms: &Terms, out: &mut [MaybeUninit<u8>]) {
     let whole = luma.len() / BLOCK * BLOCK;
@@ -257,9 +233,16 @@ fn row(c: &Yuv420, luma: &[u8], terms: &Terms, out: &mut [MaybeUninit<u8>]) {
     {
         let y = luma_term(c, y);
         for (v, t) in px.iter_mut().zip(terms) {
-            v.write(y.wrapping_add(t[i / 2]).clamp(0, 255) as u8);
+            v.write(channel(y, t[i / 2]));
         }
     }
+}
+
+/// A pixel's channel: its luma term plus its chroma term, clamped to 8 bits. The sum stays
+/// far inside 16 bits for 8-bit input, so swscale's saturating adds never saturate.
+#[inline(always)]
+fn channel(luma: i32, chroma: i32) -> u8 {
+    luma.wrapping_add(chroma).clamp(0, 255) as u8
 }
 
 #[inline(always)]
@@ -281,8 +264,8 @@ fn block(
     let mut planes = [[0u8; BLOCK]; 3];
     for (plane, t) in planes.iter_mut().zip(terms) {
         for j in 0..BLOCK / 2 {
-            plane[2 * j] = y[2 * j].wrapping_add(t[j]).clamp(0, 255) as u8;
-            plane[2 * j + 1] = y[2 * j + 1].wrapping_add(t[j]).clamp(0, 255) as u8;
+            plane[2 * j] = channel(y[2 * j], t[j]);
+            plane[2 * j + 1] = channel(y[2 * j + 1], t[j]);
         }
     }
     let [r, g, b] = &planes;

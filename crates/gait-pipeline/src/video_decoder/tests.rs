@@ -76,18 +76,9 @@ fn recorded_runs_end_as_ffmpeg_ended() {
     assert!(err.contains("moov atom not found"), "{err}");
 }
 
-/// A clean clip of `seconds` at 30 fps, 64 x 48 (H.264).
+/// A clean clip of `seconds` at 30 fps, 64 x 48 (H.264, 4:2:0).
 fn clip(dir: &std::path::Path, seconds: u32) -> std::path::PathBuf {
-    let path = dir.join("clip.mp4");
-    let status = std::process::Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-f", "lavfi", "-i"])
-        .arg(format!("testsrc=size=64x48:rate=30:duration={seconds}"))
-        .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
-        .arg(&path)
-        .status()
-        .expect("ffmpeg (tools/setup.sh installs it)");
-    assert!(status.success());
-    path
+    clip_as(dir, "clip.mp4", "64x48", "yuv420p", seconds)
 }
 
 #[test]
@@ -97,12 +88,7 @@ fn frames_over_the_socket_are_the_bytes_ffmpeg_writes() {
     // ffmpeg's standard output collected whole (a pipe), against the reader (a socket).
     let recorded = super::DecoderRecording::record(&path).unwrap();
     assert!(recorded.success && recorded.frames.len() == 60 * 64 * 48 * 3);
-    let mut frames = InputInfo::open(&path).unwrap().frames().unwrap();
-    let mut read = Vec::new();
-    while let Some(f) = frames.next_frame().unwrap() {
-        read.extend_from_slice(f.image.as_raw());
-    }
-    assert!(read == recorded.frames);
+    assert!(read_all(&InputInfo::open(&path).unwrap()) == recorded.frames);
 }
 
 #[test]
@@ -151,12 +137,18 @@ fn a_damaged_video_full_of_decoder_errors_ends() {
     }
 }
 
-/// A 1 s clip of `size` in `pix_fmt` (H.264, BT.709 limited range).
-fn clip_as(dir: &std::path::Path, name: &str, size: &str, pix_fmt: &str) -> std::path::PathBuf {
+/// A clip of `seconds` at 30 fps, `size`, in `pix_fmt` (H.264, BT.709 limited range).
+fn clip_as(
+    dir: &std::path::Path,
+    name: &str,
+    size: &str,
+    pix_fmt: &str,
+    seconds: u32,
+) -> std::path::PathBuf {
     let path = dir.join(name);
     let status = std::process::Command::new("ffmpeg")
         .args(["-v", "error", "-y", "-f", "lavfi", "-i"])
-        .arg(format!("testsrc2=size={size}:rate=30:duration=1"))
+        .arg(format!("testsrc2=size={size}:rate=30:duration={seconds}"))
         .args([
             "-c:v",
             "libx264",
@@ -172,15 +164,19 @@ fn clip_as(dir: &std::path::Path, name: &str, size: &str, pix_fmt: &str) -> std:
     path
 }
 
-/// Every frame, read whole, against ffmpeg's rgb24 output of the whole video.
-fn read_matches_ffmpeg(info: &InputInfo) -> bool {
-    let recorded = super::DecoderRecording::record(&info.path).unwrap();
+/// Every frame's bytes, read through `info`'s reader, one after another.
+fn read_all(info: &InputInfo) -> Vec<u8> {
     let mut frames = info.frames().unwrap();
     let mut read = Vec::new();
     while let Some(f) = frames.next_frame().unwrap() {
         read.extend_from_slice(f.image.as_raw());
     }
-    read == recorded.frames
+    read
+}
+
+/// Every frame, read whole, against ffmpeg's rgb24 output of the whole video.
+fn read_matches_ffmpeg(info: &InputInfo) -> bool {
+    read_all(info) == super::DecoderRecording::record(&info.path).unwrap().frames
 }
 
 /// A 4:2:0 video (the sample's size: not a multiple of 16 wide) is taken as yuv420p, checked
@@ -192,7 +188,7 @@ fn frames_taken_as_yuv_are_ffmpegs_rgb_bytes() {
         ("a.mp4", "1768x994", "yuv420p"),
         ("b.mp4", "66x48", "yuv444p"),
     ] {
-        let path = clip_as(dir.path(), name, size, pix_fmt);
+        let path = clip_as(dir.path(), name, size, pix_fmt, 1);
         let info = InputInfo::open(&path).unwrap();
         assert_eq!(info.yuv.is_some(), pix_fmt == "yuv420p", "{name}");
         assert!(read_matches_ffmpeg(&info), "{name}: the frames differ");
@@ -206,7 +202,7 @@ fn frames_taken_as_yuv_are_ffmpegs_rgb_bytes() {
 #[test]
 fn a_conversion_unlike_ffmpegs_falls_back_to_its_rgb() {
     let dir = tempfile::tempdir().unwrap();
-    let path = clip_as(dir.path(), "c.mp4", "64x48", "yuv420p");
+    let path = clip_as(dir.path(), "c.mp4", "64x48", "yuv420p", 1);
     let mut info = InputInfo::open(&path).unwrap();
     info.yuv = crate::yuv::Yuv420::of_stream(Some("yuv420p"), Some("smpte240m"), None, (64, 48));
     assert!(read_matches_ffmpeg(&info));
