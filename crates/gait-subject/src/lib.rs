@@ -8,6 +8,7 @@ pub mod appearance;
 mod bridge;
 mod choose;
 pub mod link;
+mod lookahead;
 mod returns;
 pub mod sparse;
 mod stitch;

@@ -5,6 +5,7 @@ use gait_core::PersonBox;
 use serde::{Deserialize, Serialize};
 
 use crate::appearance::Appearance;
+use crate::lookahead;
 
 /// One person seen in one frame.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -106,7 +107,7 @@ impl Track {
 
     /// The cost of continuing this track with `s`, or `None` when `s` is not
     /// this person (too far, another size, other colours after a gap).
-    fn cost(&self, s: &Sighting, limits: &LinkLimits) -> Option<f32> {
+    pub(crate) fn cost(&self, s: &Sighting, limits: &LinkLimits) -> Option<f32> {
         let dt = s.frame - self.last().frame;
         if dt == 0 || dt > limits.max_gap_frames.saturating_add(1) {
             return None;
@@ -136,14 +137,16 @@ impl Track {
 /// into tracks, in order of their first sighting.
 pub fn link(frames: &[(usize, Vec<Sighting>)], limits: &LinkLimits) -> Vec<Track> {
     let mut tracks: Vec<Track> = Vec::new();
-    for (frame, seen) in frames {
+    for (i, (frame, seen)) in frames.iter().enumerate() {
         let seen: Vec<Sighting> = seen.iter().filter(|s| upright(s)).copied().collect();
         // Every plausible (track, sighting) pair, cheapest first: a greedy
         // assignment, which is exact whenever the people are well apart.
         let mut pairs: Vec<(f32, usize, usize)> = Vec::new();
         for (t, track) in tracks.iter().enumerate() {
             for (k, s) in seen.iter().enumerate() {
-                if let Some(c) = track.cost(s, limits) {
+                if let Some(c) = track.cost(s, limits)
+                    && !lookahead::contradicted(track, s, &frames[i + 1..], limits)
+                {
                     pairs.push((c, t, k));
                 }
             }
