@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use gait_core::PersonBox;
 
-use crate::link::Sighting;
+use crate::track::Sighting;
 use crate::{Appearance, TrackSummary};
 
 /// How far the subject's boxes reach beyond its sightings, in frames.
@@ -194,7 +194,7 @@ impl Lookalike<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::{Track, tests::seen};
+    use crate::track::{Track, tests::seen};
 
     fn reach() -> Reach {
         Reach {

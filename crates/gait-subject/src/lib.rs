@@ -12,6 +12,7 @@ mod lookahead;
 mod returns;
 pub mod sparse;
 mod stitch;
+mod track;
 pub mod walking;
 
 use std::collections::BTreeMap;
@@ -20,7 +21,7 @@ use gait_core::{PersonBox, PersonChoice, ranges};
 use serde::{Deserialize, Serialize};
 
 pub use appearance::Appearance;
-pub use link::{LinkLimits, Sighting, Track};
+pub use track::{LinkLimits, Sighting, Track};
 pub use walking::Walk;
 
 /// The `[subject]` table: how people are linked into tracks.
@@ -350,7 +351,7 @@ fn check_point(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::tests::seen;
+    use crate::track::tests::seen;
     use gait_core::{PersonAt, PersonRule};
 
     /// A standing person (large) and a walker (smaller) who is hidden for a while.

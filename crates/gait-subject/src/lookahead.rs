@@ -11,7 +11,7 @@
 //! limit and stays grown (her legs coming back into view) finds no such
 //! sighting and is linked as before.
 
-use crate::link::{LinkLimits, Sighting, Track};
+use crate::track::{LinkLimits, Sighting, Track};
 
 /// A link is marginal when the sum of its squared distance and size change,
 /// each against its limit, exceeds this: near both limits at once (each
@@ -67,7 +67,7 @@ fn strain(track: &Track, s: &Sighting, limits: &LinkLimits) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::tests::{LIMITS, seen};
+    use crate::track::tests::{LIMITS, seen};
 
     fn walker_to(frame: usize) -> Track {
         Track {

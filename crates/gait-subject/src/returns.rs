@@ -65,7 +65,7 @@ fn appearance(t: &TrackSummary) -> Appearance {
 mod tests {
     use gait_core::{PersonChoice, PersonRule};
 
-    use crate::link::tests::seen;
+    use crate::track::tests::seen;
     use crate::{SubjectConfig, find};
 
     /// A person standing all along (grey 0.8); the subject (grey 0.2) walks to the left over

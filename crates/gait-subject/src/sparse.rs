@@ -8,7 +8,7 @@
 
 use gait_core::PersonBox;
 
-use crate::link::Sighting;
+use crate::track::Sighting;
 
 /// Largest move of a person between the two detected frames, in body sizes
 /// per frame: a walker covers about 0.02, a runner 0.07, and the detector's
@@ -109,7 +109,7 @@ fn apart(people: &[Sighting]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::tests::seen;
+    use crate::track::tests::seen;
 
     fn people(f: usize, xs: &[f32]) -> Vec<Sighting> {
         xs.iter().map(|&x| seen(f, x, 400.0, 0.3)).collect()

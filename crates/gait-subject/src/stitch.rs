@@ -2,7 +2,7 @@
 //! body, a track that takes over where another ended, and two tracks that
 //! take one person's frames in turn.
 
-use crate::link::{LinkLimits, Track};
+use crate::track::{LinkLimits, Track};
 
 /// Two tracks are one person only when their boxes coincide in at least this
 /// many frames (or in every frame of the shorter one): a single shared frame
@@ -172,7 +172,7 @@ fn merge(a: &mut Track, b: Track) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::tests::{LIMITS, seen};
+    use crate::track::tests::{LIMITS, seen};
 
     #[test]
     fn a_second_box_on_the_same_body_is_stitched_to_its_track() {

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::link::Track;
+use crate::track::Track;
 
 /// Slowest pace that counts as moving across the view, body sizes per second
 /// (a slow pathological walk of 0.3 m/s is about 0.15 body sizes/s).
@@ -78,7 +78,7 @@ pub fn longest_walk(track: &Track, fps: f64) -> Walk {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::tests::seen;
+    use crate::track::tests::seen;
 
     #[test]
     fn a_walk_across_the_view_scores_its_displacement() {
