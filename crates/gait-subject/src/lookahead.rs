@@ -9,7 +9,8 @@
 //! limit of 1.4, 0.97 of the distance it may move), and from 92 his old
 //! track took her; the walker's result was his. A box that grows at the
 //! limit and stays grown (her legs coming back into view) finds no such
-//! sighting and is linked as before.
+//! sighting and is linked as before; only a box bigger than the track's, off
+//! its way, is ever refused ([`contradicted`]).
 
 use crate::track::{LinkLimits, Sighting, Track};
 
@@ -48,6 +49,7 @@ pub(crate) fn contradicted(
     }
     let last = track.last();
     let horizon = last.frame + limits.short_gap_frames + 1;
+    let (look, size) = (track.appearance(), track.size().max(1.0));
     let other = Track {
         sightings: vec![*s],
     };
@@ -56,8 +58,8 @@ pub(crate) fn contradicted(
         .take_while(|(frame, _)| *frame <= horizon)
         .flat_map(|(_, seen)| seen)
         .any(|x| {
-            let colours = track.appearance().distance(&x.appearance);
-            let off_way = s.person.distance(&last.towards(x, s.frame)) / track.size().max(1.0);
+            let colours = look.distance(&x.appearance);
+            let off_way = s.person.distance(&last.towards(x, s.frame)) / size;
             strain(track, x, limits) <= CONFIRMING
                 && colours.is_none_or(|c| c <= limits.max_colour_distance)
                 && other.cost(x, limits).is_none()

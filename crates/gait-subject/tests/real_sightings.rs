@@ -1,4 +1,4 @@
-//! The subject pass on the real people of the sample and of eight re-encodings
+//! The subject pass on the real people of the sample and of eight copies of it
 //! (tests/data/subject): the walker is followed through the same frames
 //! whatever the encoding, and never swapped for the man she passes.
 
