@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use gait_core::Frame;
 
+use crate::frame_spool::KeptFrames;
 use crate::input::InputInfo;
 use crate::video_decoder::VideoDecoder;
 use crate::{PipelineError, still};
@@ -12,6 +13,9 @@ use crate::{PipelineError, still};
 pub(crate) enum Source {
     Video(Box<VideoDecoder>),
     Images(Vec<PathBuf>),
+    /// Frames an earlier reader kept (frame_spool.rs), with a buffer for their planes; the
+    /// frames after them are decoded.
+    Kept(std::sync::Arc<KeptFrames>, Vec<u8>),
     /// Frames decoded ahead by another reader on its own thread.
     Ahead(std::sync::mpsc::Receiver<Result<Option<Frame>, PipelineError>>),
 }
@@ -90,6 +94,27 @@ impl FrameReader {
                     ));
                 }
                 img
+            }
+            Source::Kept(kept, planes) => {
+                let size = (self.info.width as usize, self.info.height as usize);
+                let mut buf = Vec::with_capacity(size.0 * size.1 * 3);
+                let read = kept
+                    .read(index, size, planes, &mut buf)
+                    .map_err(|e| PipelineError::input(&self.info.path, e))?;
+                if !read {
+                    if kept.ended() {
+                        return Ok(None);
+                    }
+                    let from = crate::video_decoder::Request {
+                        from: index,
+                        ..self.info.request()
+                    };
+                    self.source = Source::Video(Box::new(self.info.decoder(from)?));
+                    return self.read_frame();
+                }
+                image::RgbImage::from_raw(self.info.width, self.info.height, buf).ok_or_else(
+                    || PipelineError::input(&self.info.path, "frame buffer size mismatch"),
+                )?
             }
             Source::Video(decoder) => {
                 let size = (self.info.width as usize, self.info.height as usize);

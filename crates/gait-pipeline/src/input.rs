@@ -59,6 +59,8 @@ pub struct InputInfo {
     pub(crate) yuv: Option<crate::yuv::Yuv420>,
     /// Whether ffmpeg converts this input's frames as yuv.rs does (shared by the readers).
     pub(crate) yuv_verdict: crate::video_decoder::YuvVerdict,
+    /// Frames the first reader keeps for the others (shared by the readers).
+    pub(crate) spool: crate::frame_spool::FrameSpool,
 }
 
 /// Nanoseconds spent in [`FrameReader::next_frame`], over every reader of one input.
@@ -194,6 +196,7 @@ impl InputInfo {
             reading: ReadClock::default(),
             yuv: None,
             yuv_verdict: Default::default(),
+            spool: Default::default(),
         })
     }
 
@@ -284,7 +287,7 @@ impl InputInfo {
 
     /// How every pass decodes this video: its stream, its frames resampled to a constant rate,
     /// converted to standard range and deinterlaced where it needs it; all frames, full size.
-    fn request(&self) -> Request {
+    pub(crate) fn request(&self) -> Request {
         let standard_range = self
             .hdr_transfer
             .as_deref()
@@ -318,14 +321,13 @@ impl InputInfo {
                 if let Some((w, h)) = req.size {
                     (info.width, info.height) = (w, h);
                 }
-                // Scaled frames come as ffmpeg scales them, in rgb24.
-                let req = match req.size {
-                    Some(_) => Request { yuv: None, ..req },
-                    None => self.yuv_verdict.settle(req),
+                let kept = req.size.is_none().then(|| self.spool.kept()).flatten();
+                let source = match kept {
+                    Some(kept) => Source::Kept(kept, Vec::new()),
+                    None => Source::Video(Box::new(self.decoder(req)?)),
                 };
-                let decoder = VideoDecoder::spawn(&self.path, req, self.yuv_verdict.clone())?;
                 let inner = FrameReader {
-                    source: Source::Video(Box::new(decoder)),
+                    source,
                     info,
                     next: req.from,
                 };
@@ -337,6 +339,37 @@ impl InputInfo {
             source,
             next: req.from,
         })
+    }
+
+    /// ffmpeg decoding this video as `req` asks. A reader of every frame at full size keeps
+    /// them for the readers after it when [`Self::keep_frames`] asked for it.
+    pub(crate) fn decoder(&self, req: Request) -> Result<VideoDecoder, PipelineError> {
+        // Scaled frames come as ffmpeg scales them, in rgb24.
+        let req = match req.size {
+            Some(_) => Request { yuv: None, ..req },
+            None => self.yuv_verdict.settle(req),
+        };
+        let mut decoder = VideoDecoder::spawn(&self.path, req, self.yuv_verdict.clone())?;
+        if let (None, 0, Some(yuv)) = (req.size, req.from, req.yuv) {
+            let len = crate::yuv::Yuv420::frame_len(self.width as usize, self.height as usize);
+            if let Some(writer) = self.spool.writer(yuv, len, self.frames) {
+                decoder.keep_frames(writer);
+            }
+        }
+        Ok(decoder)
+    }
+
+    /// The next reader of every frame (the subject pass's) keeps them in a temporary file
+    /// (frame_spool.rs), and the readers after it read them there instead of decoding again.
+    pub fn keep_frames(&self) {
+        if self.kind == Kind::Video {
+            self.spool.arm();
+        }
+    }
+
+    /// Frees the frames kept since [`Self::keep_frames`].
+    pub fn release_kept_frames(&self) {
+        self.spool.release();
     }
 
     /// Reads the frames of a recorded ffmpeg run as if ffmpeg decoded this video now (for the

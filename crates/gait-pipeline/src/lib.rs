@@ -13,6 +13,7 @@ pub mod edges;
 mod error;
 pub mod folder_lock;
 mod frame_reader;
+mod frame_spool;
 pub mod frame_timing;
 pub mod input;
 pub mod interpolate;

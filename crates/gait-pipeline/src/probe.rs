@@ -163,6 +163,7 @@ pub fn parse_ffprobe(path: &Path, stdout: &[u8]) -> Result<InputInfo, PipelineEr
         reading: ReadClock::default(),
         yuv,
         yuv_verdict: Default::default(),
+        spool: Default::default(),
     })
 }
 

@@ -93,6 +93,10 @@ fn prepare(
     let total = range_len(config, &info);
     let bar = |pass: &str| Progress::new(opts.progress, total, pass, opts.handle.as_ref());
     let (t, read) = (Instant::now(), info.seconds_reading());
+    // The pose pass reads the frames the subject pass decoded.
+    if config.subject.enabled {
+        info.keep_frames();
+    }
     let (subject, subject_record, warnings) = subject::run_pass(
         config,
         &info,
@@ -216,6 +220,7 @@ fn run_from(
         sharpness: Sharpness::new(&names, fps, config.input.first_frame),
     }
     .run()?;
+    info.release_kept_frames();
     let (model, decoding) = (
         model_seconds(&records) - model,
         info.seconds_reading() - read,

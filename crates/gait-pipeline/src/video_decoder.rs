@@ -15,6 +15,7 @@ use std::sync::{Arc, OnceLock};
 use std::thread::JoinHandle;
 
 use crate::PipelineError;
+use crate::frame_spool::SpoolWriter;
 use crate::yuv::Yuv420;
 
 /// ffmpeg's messages kept for the error (the first line is what the user sees).
@@ -286,6 +287,8 @@ pub(crate) struct VideoDecoder {
     verdict: YuvVerdict,
     /// A yuv420p frame's buffer, reused.
     planes: Vec<u8>,
+    /// Where the frames read are kept for later readers (frame_spool.rs).
+    keep: Option<SpoolWriter>,
 }
 
 impl VideoDecoder {
@@ -316,6 +319,7 @@ impl VideoDecoder {
             check: check.and_then(Result::ok),
             verdict,
             planes: Vec::new(),
+            keep: None,
         })
     }
 
@@ -335,7 +339,14 @@ impl VideoDecoder {
             check: None,
             verdict: YuvVerdict::default(),
             planes: Vec::new(),
+            keep: None,
         }
+    }
+
+    /// Keeps the yuv420p frames read from now on for later readers (the first frame's reader
+    /// only: the writer numbers them from 0).
+    pub(crate) fn keep_frames(&mut self, writer: SpoolWriter) {
+        self.keep = Some(writer);
     }
 
     /// Appends the next `width` x `height` frame to `buf` as rgb24: the bytes read (0 at the
@@ -346,7 +357,13 @@ impl VideoDecoder {
         size: (usize, usize),
     ) -> Result<usize, PipelineError> {
         match self.req.yuv {
-            None => self.read_bytes(buf, size.0 * size.1 * 3),
+            None => {
+                // ffmpeg's rgb24 frames are not what the kept frames' readers convert.
+                if let Some(keep) = &mut self.keep {
+                    keep.abandon();
+                }
+                self.read_bytes(buf, size.0 * size.1 * 3)
+            }
             Some(_) if self.req.check => self.read_checked(buf, size),
             Some(yuv) => self.read_yuv(yuv, buf, size),
         }
@@ -382,6 +399,9 @@ impl VideoDecoder {
         }
         buf.truncate(start);
         self.req.yuv = None;
+        if let Some(keep) = &mut self.keep {
+            keep.abandon();
+        }
         self.source = Box::new(Ffmpeg::spawn(&self.path, self.req)?);
         self.read_bytes(buf, size.0 * size.1 * 3)
     }
@@ -399,6 +419,9 @@ impl VideoDecoder {
         let read = self.read_bytes(&mut planes, len);
         if matches!(read, Ok(n) if n == len) {
             yuv.convert(&planes, width, height, buf);
+            if let Some(keep) = &mut self.keep {
+                keep.push(&planes);
+            }
         }
         self.planes = planes;
         let n = read?;
@@ -438,6 +461,9 @@ impl VideoDecoder {
         }
         if frames == 0 {
             return Err(PipelineError::input(&self.path, "the video has no frames"));
+        }
+        if let Some(keep) = &mut self.keep {
+            keep.end();
         }
         Ok(())
     }

@@ -210,3 +210,61 @@ fn a_conversion_unlike_ffmpegs_falls_back_to_its_rgb() {
     // The input's later readers take rgb24 without checking again.
     assert!(read_matches_ffmpeg(&info));
 }
+
+/// Frames from `from` on, read through `info`'s reader.
+fn read_from(info: &InputInfo, from: usize) -> Vec<u8> {
+    let mut frames = info.frames_from(from).unwrap();
+    let mut read = Vec::new();
+    while let Some(f) = frames.next_frame().unwrap() {
+        read.extend_from_slice(f.image.as_raw());
+    }
+    read
+}
+
+/// The frames the subject pass's reader keeps are read back by the pose pass's as ffmpeg's
+/// rgb24 bytes, without ffmpeg: here the video is gone before the second read.
+#[test]
+fn kept_frames_are_read_back_as_ffmpeg_decodes_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = clip_as(dir.path(), "k.mp4", "66x48", "yuv420p", 2);
+    let info = InputInfo::open(&path).unwrap();
+    let whole = super::DecoderRecording::record(&path).unwrap().frames;
+    info.keep_frames();
+    assert!(read_all(&info) == whole);
+    std::fs::remove_file(&path).unwrap();
+    let len = 66 * 48 * 3;
+    assert!(read_from(&info, 10) == whole[10 * len..]);
+    // Released, nothing is kept, and the frames must come from the (missing) video.
+    info.release_kept_frames();
+    assert!(info.frames_from(10).unwrap().next_frame().is_err());
+}
+
+/// A first reader stopped early keeps the frames it read; a later reader decodes the rest.
+#[test]
+fn frames_after_those_kept_are_decoded() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = clip_as(dir.path(), "e.mp4", "64x48", "yuv420p", 2);
+    let info = InputInfo::open(&path).unwrap();
+    let whole = super::DecoderRecording::record(&path).unwrap().frames;
+    info.keep_frames();
+    let mut first = info.frames().unwrap();
+    for _ in 0..20 {
+        first.next_frame().unwrap();
+    }
+    drop(first);
+    let len = 64 * 48 * 3;
+    assert!(read_from(&info, 5) == whole[5 * len..]);
+}
+
+/// Frames that failed the conversion's check come as ffmpeg's rgb24 and are not kept.
+#[test]
+fn frames_unlike_ffmpegs_are_not_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = clip_as(dir.path(), "c.mp4", "64x48", "yuv420p", 1);
+    let mut info = InputInfo::open(&path).unwrap();
+    info.yuv = crate::yuv::Yuv420::of_stream(Some("yuv420p"), Some("smpte240m"), None, (64, 48));
+    info.keep_frames();
+    assert!(read_matches_ffmpeg(&info));
+    assert!(info.spool.kept().is_none());
+    assert!(read_matches_ffmpeg(&info));
+}
