@@ -1,11 +1,11 @@
 """Cost as the work grows (issue 40): the README's main command on the sample, on the same walk at
-4K, and on a 2-minute recording (the sample concatenated), each in a fresh folder, interleaved
+1080p and 4K, and on a 2-minute recording (the sample concatenated), each in a fresh folder, interleaved
 over rounds: seconds per video second and peak RSS, each against the sample's of the same round.
 
     python3 tools/bench/scale.py [--gait target/debug/gait] [--rounds 1] [--md OUT.md]
 
-Videos are made once with ffmpeg under target/bench/scale/ (the 4K copy is the robustness
-matrix's variant: upscaled, H.264 CRF 18).
+Videos are made once with ffmpeg under target/bench/scale/ (the 1080p and 4K copies upscaled as the
+robustness matrix's 4K variant: H.264 CRF 18).
 """
 import argparse
 import os
@@ -25,11 +25,12 @@ from variants import probe  # noqa: E402  (width, height, fps, frames) by ffprob
 def make_videos(work):
     """The sample, its 4K copy and a 2-minute concatenation (16 copies), made once."""
     work.mkdir(parents=True, exist_ok=True)
-    k4 = work / "4k.mp4"
-    if not k4.exists():
-        subprocess.run(["ffmpeg", "-v", "error", "-y", "-i", str(SAMPLE), "-an", "-vf", "scale=-2:2160",
-                        "-c:v", "libx264", "-pix_fmt", "yuv420p", "-preset", "veryfast", "-crf", "18",
-                        str(k4)], check=True)
+    for name, height in [("1080p", 1080), ("4k", 2160)]:
+        copy = work / f"{name}.mp4"
+        if not copy.exists():
+            subprocess.run(["ffmpeg", "-v", "error", "-y", "-i", str(SAMPLE), "-an", "-vf", f"scale=-2:{height}",
+                            "-c:v", "libx264", "-pix_fmt", "yuv420p", "-preset", "veryfast", "-crf", "18",
+                            str(copy)], check=True)
     long = work / "2min.mp4"
     if not long.exists():
         listing = work / "concat.txt"
@@ -37,7 +38,7 @@ def make_videos(work):
         # Stream copy: the same frames 16 times, no re-encode.
         subprocess.run(["ffmpeg", "-v", "error", "-y", "-f", "concat", "-safe", "0", "-i", str(listing),
                         "-c", "copy", "-an", str(long)], check=True)
-    return {"sample": SAMPLE, "4k": k4, "2min": long}
+    return {"sample": SAMPLE, "1080p": work / "1080p.mp4", "4k": work / "4k.mp4", "2min": long}
 
 
 def measure(gait, video, out):
