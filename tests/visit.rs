@@ -289,6 +289,36 @@ fn a_visit_of_the_sample_and_its_mirror_takes_each_side_from_its_near_view() {
             (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt();
         println!("{joint}: original left vs mirrored right, RMS {rms:.2} deg");
     }
+    // Vaulting weighs one heel against the other, and each view sees one heel near and one far
+    // (the left view alone reads +3 % of the leg on the right): the visit pools both views'
+    // cycles, so each side's value rests on both.
+    let vaulting = |file: &Path, side: &str| {
+        let mut r = csv::Reader::from_path(file).unwrap();
+        let h = r.headers().unwrap().clone();
+        let at = |name: &str| h.iter().position(|c| c == name).unwrap();
+        let (item, s, n) = (at("item"), at("side"), at("n"));
+        let row = r.records().map(Result::unwrap);
+        let row = row
+            .into_iter()
+            .find(|x| &x[item] == "vaulting" && &x[s] == side);
+        let row = row.expect("a vaulting row per side");
+        let from = h
+            .iter()
+            .position(|c| c == "pass")
+            .map(|p| row[p].to_string());
+        (row[n].parse::<usize>().unwrap(), from)
+    };
+    for side in ["left", "right"] {
+        let (pooled, from) = vaulting(&out.join("visit_checklist.csv"), side);
+        let from = from.unwrap_or_default();
+        assert!(
+            from.ends_with("both sides, cycles pooled"),
+            "{side}: {from}"
+        );
+        let passes = out.join("passes");
+        let each = |p: &str| vaulting(&passes.join(p).join("checklist.csv"), side).0;
+        assert_eq!(pooled, each("1-left") + each("2-right"), "{side}");
+    }
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(
         html.contains("left sagittal curves: left view (sports2d-demo.mp4) (near the camera)"),

@@ -13,6 +13,7 @@ mod config;
 mod frontal_items;
 mod html;
 mod judge;
+mod pool;
 mod review_link;
 mod run_files;
 mod sagittal_items;
@@ -28,6 +29,7 @@ use serde::Serialize;
 
 pub use config::ChecklistConfig;
 pub use gait_kin::Side;
+pub use pool::{POOLED_OVER_VIEWS, pooled};
 pub use review_link::{review_port, review_url};
 pub use run_files::{Param, RunFiles};
 pub use sagittal_items::pooled_timing;

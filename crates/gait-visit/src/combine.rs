@@ -208,6 +208,10 @@ pub fn checklist(
             out.push((v, pooled.1.to_string()));
             continue;
         }
+        if let Some((v, from)) = pooled_over_side_views(per_pass, id, side, preferred) {
+            out.push((v, from));
+            continue;
+        }
         let chosen = if template.item.paired {
             per_pass
                 .iter()
@@ -235,6 +239,35 @@ pub fn checklist(
         }
     }
     out
+}
+
+/// Item `id` of `side` pooled over the side views that judge it on both sides (the best ranked
+/// first), for the items of [`gait_checklist::POOLED_OVER_VIEWS`]: a left and a right view see
+/// each leg once near and once far (pool.rs).
+fn pooled_over_side_views(
+    per_pass: &[(&Pass, Vec<Verdict>)],
+    id: &str,
+    side: gait_checklist::Side,
+    preferred: gait_checklist::Side,
+) -> Option<(Verdict, String)> {
+    if !gait_checklist::POOLED_OVER_VIEWS.contains(&id) {
+        return None;
+    }
+    let mut views: Vec<&(&Pass, Vec<Verdict>)> = per_pass
+        .iter()
+        .filter(|(p, vs)| !p.is_frontal() && both_sides_rank(p, vs, id, preferred).0)
+        .collect();
+    views.sort_by_key(|(p, vs)| std::cmp::Reverse(both_sides_rank(p, vs, id, preferred)));
+    let verdicts: Vec<&Verdict> = views
+        .iter()
+        .filter_map(|(_, vs)| vs.iter().find(|v| v.item.id == id && v.side == side))
+        .collect();
+    let v = gait_checklist::pooled(&verdicts)?;
+    let labels: Vec<String> = views.iter().map(|(p, _)| p.label()).collect();
+    Some((
+        v,
+        format!("{}, both sides, cycles pooled", labels.join(" + ")),
+    ))
 }
 
 /// How well a pass judges the paired item `id`: on both sides, from the `preferred` side's
