@@ -29,7 +29,7 @@ use serde::Serialize;
 
 pub use config::ChecklistConfig;
 pub use gait_kin::Side;
-pub use pool::{POOLED_OVER_VIEWS, pooled};
+pub use pool::{POOLED_OVER_VIEWS, pool_groups, pooled};
 pub use review_link::{review_port, review_url};
 pub use run_files::{Param, RunFiles};
 pub use sagittal_items::pooled_timing;

@@ -11,6 +11,34 @@ use crate::verdict::{Status, Verdict};
 /// the other side's mean, by [`crate::judge`]'s rule).
 pub const POOLED_OVER_VIEWS: [&str; 1] = [crate::vaulting::VAULTING.id];
 
+/// Groups of values given as (mean, SD, count) pooled into one: the mean weighted by the counts,
+/// the SD of all values (within each group plus the groups' spread about the pooled mean; NaN
+/// for one value), the count. A group's SD that is not a number (one value) adds nothing within.
+pub fn pool_groups(groups: &[(f64, f64, usize)]) -> Option<(f64, f64, usize)> {
+    let n: usize = groups.iter().map(|g| g.2).sum();
+    if n == 0 {
+        return None;
+    }
+    let mean = groups.iter().map(|g| g.0 * g.2 as f64).sum::<f64>() / n as f64;
+    let ss: f64 = groups
+        .iter()
+        .map(|&(m, sd, k)| {
+            let within = if sd.is_finite() {
+                sd * sd * (k as f64 - 1.0)
+            } else {
+                0.0
+            };
+            within + k as f64 * (m - mean).powi(2)
+        })
+        .sum();
+    let sd = if n > 1 {
+        (ss / (n as f64 - 1.0)).sqrt()
+    } else {
+        f64::NAN
+    };
+    Some((mean, sd, n))
+}
+
 /// `verdicts` of one item and side, each judged, pooled: the mean over all their cycles, the
 /// spread within and between them, and the same rule as one pass's (present when the mean lies
 /// past the threshold by at least its standard error). The frames to review are those of the
@@ -24,20 +52,8 @@ pub fn pooled(verdicts: &[&Verdict]) -> Option<Verdict> {
     if judged.len() < 2 {
         return None;
     }
-    let n: usize = judged.iter().map(|v| v.n).sum();
-    let mean = judged.iter().map(|v| v.value * v.n as f64).sum::<f64>() / n as f64;
-    let ss: f64 = judged
-        .iter()
-        .map(|v| {
-            let within = if v.spread.is_finite() {
-                v.spread * v.spread * (v.n as f64 - 1.0)
-            } else {
-                0.0
-            };
-            within + v.n as f64 * (v.value - mean).powi(2)
-        })
-        .sum();
-    let spread = (ss / (n as f64 - 1.0)).sqrt();
+    let groups: Vec<(f64, f64, usize)> = judged.iter().map(|v| (v.value, v.spread, v.n)).collect();
+    let (mean, spread, n) = pool_groups(&groups)?;
     let first = judged[0];
     let past = match first.beyond {
         "below" => first.threshold - mean,

@@ -150,32 +150,13 @@ fn pooled(passes: &[&Pass]) -> Vec<StParam> {
 }
 
 fn pool(rows: &[&StParam]) -> Option<StParam> {
-    let n: usize = rows.iter().map(|r| r.n).sum();
-    if n == 0 {
-        return None;
-    }
-    let mean = rows.iter().map(|r| r.mean * r.n as f64).sum::<f64>() / n as f64;
-    // Within-pass variance plus the passes' spread about the pooled mean.
-    let ss: f64 = rows
-        .iter()
-        .map(|r| {
-            let within = if r.sd.is_finite() {
-                r.sd * r.sd * (r.n as f64 - 1.0)
-            } else {
-                0.0
-            };
-            within + r.n as f64 * (r.mean - mean).powi(2)
-        })
-        .sum();
+    let groups: Vec<(f64, f64, usize)> = rows.iter().map(|r| (r.mean, r.sd, r.n)).collect();
+    let (mean, sd, n) = gait_checklist::pool_groups(&groups)?;
     Some(StParam {
         parameter: rows[0].parameter.clone(),
         side: rows[0].side.clone(),
         mean,
-        sd: if n > 1 {
-            (ss / (n as f64 - 1.0)).sqrt()
-        } else {
-            f64::NAN
-        },
+        sd,
         n,
         unit: rows[0].unit.clone(),
     })
