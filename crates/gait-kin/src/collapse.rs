@@ -15,7 +15,12 @@
 //! interpolation itself has the legs close together: nothing is marked. Only when the
 //! interpolated legs stay apart while the drawn ones are close has the model collapsed them.
 //! The left-right offset does not depend on the labels, so a frame whose labels are merely
-//! exchanged is never marked (that is the swap correction's job).
+//! exchanged is never marked (that is the swap correction's job). An end frame with exchanged
+//! labels, though, flips its offset's sign and makes a collapse beside it look like a crossing:
+//! where the offset would have to turn round faster than a swing foot passes the stance foot,
+//! the end is taken with its labels the other way round (a 720p copy of the sample: one frame
+//! exchanged, the next collapsed, and the swap correction, predicting through the collapse,
+//! then exchanged the six correct frames after it).
 
 use crate::config::Side;
 use crate::tracks::{LOWER_LEG, Tracks};
@@ -38,6 +43,12 @@ pub struct CollapseRule {
     /// lengths is about a quarter of a step and ten times the frame-to-frame jitter of a pose
     /// model's feet.
     pub min_drop: f64,
+    /// The fastest the legs' left-right offset can turn round in a real crossing, in leg
+    /// lengths (hip to ankle) per second: a swing foot passes the planted one at up to about
+    /// 4.5 leg lengths a second (3.5-4 m/s on a 0.85 m leg); 7.5 leaves a margin for jitter.
+    /// Ends whose offsets point opposite ways and differ by more than that are one crossing
+    /// too fast, so one of them has its labels exchanged.
+    pub max_crossing_speed: f64,
 }
 
 impl Default for CollapseRule {
@@ -46,6 +57,7 @@ impl Default for CollapseRule {
             max_run_s: 0.1,
             max_ratio: 0.5,
             min_drop: 0.25,
+            max_crossing_speed: 7.5,
         }
     }
 }
@@ -79,12 +91,19 @@ impl CollapseRule {
         // Is frame j collapsed relative to the legs interpolated between frames a and b?
         let collapsed = |a: usize, j: usize, b: usize| -> bool {
             let w = (j - a) as f64 / (b - a) as f64;
+            let turn_max = self.max_crossing_speed * leg * (b - a) as f64 / t.fps;
             let (mut drawn, mut expected, mut ends, mut k) = (0.0, 0.0, [0.0; 2], 0);
             for &p in &pairs {
                 let (Some(da), Some(dj), Some(db)) =
                     (offset(t, p, a), offset(t, p, j), offset(t, p, b))
                 else {
                     continue;
+                };
+                let turned = da.0 * db.0 + da.1 * db.1 < 0.0;
+                let da = if turned && (db.0 - da.0).hypot(db.1 - da.1) > turn_max {
+                    (-da.0, -da.1)
+                } else {
+                    da
                 };
                 let e = (da.0 + w * (db.0 - da.0), da.1 + w * (db.1 - da.1));
                 drawn += dj.0.hypot(dj.1);
@@ -220,6 +239,15 @@ mod tests {
             }
         }
         assert_eq!(t.at(1 + 2, one + 1), clean.at(1 + 2, one + 1));
+
+        // A collapse beside a frame with exchanged labels: the offset would turn round from one
+        // end to the other faster than a foot moves, so it is no crossing.
+        let mut beside = clean.clone();
+        swap_frame(&mut beside, run - 1);
+        collapse(&mut beside, run);
+        let found = CollapseRule::default().find(&beside);
+        let got: Vec<usize> = (0..beside.len()).filter(|&i| found[i]).collect();
+        assert_eq!(got, vec![run]);
 
         // A run longer than max_run_s (0.1 s = 3 frames) is not a glitch that can be bridged.
         let mut long = clean.clone();
