@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Makes tests/data/sample-reencoded/<cpu>/: the keypoints that `gait run` with the default config
-# gives on this machine for the bundled sample and for its H.264 CRF 18 copy (the re-encode of
-# tests/robustness.rs), canonical columns only. The pose model's floats differ between CPUs'
+# gives on this machine for the bundled sample, for its H.264 CRF 18 copy (the re-encode of
+# tests/robustness.rs), and for a 720p CRF 23 copy and an HEVC copy of its mirror, canonical
+# columns only. The pose model's floats differ between CPUs'
 # kernels, and with them which decisions tip; a folder per CPU lets crates/gait-kin/tests/
 # reencoded.rs check the kinematics' decisions on every CPU's keypoints on any machine.
 # Usage: bash tools/robustness/reencoded_fixture.sh NAME   (e.g. amd-zen4-avx512)
@@ -16,9 +17,17 @@ out=tests/data/sample-reencoded/$name
 mkdir -p "$work" "$out"
 ffmpeg -v error -y -i data/sample/sports2d-demo.mp4 -an -c:v libx264 -crf 18 -preset veryfast \
     -pix_fmt yuv420p "$work/crf18.mp4"
-for v in original crf18; do
+# Two copies as a user's tools make them (ffmpeg's default preset): 720p at CRF 23, and the mirror
+# (a right view) in HEVC at CRF 26 as a phone stores it.
+ffmpeg -v error -y -i data/sample/sports2d-demo.mp4 -an -vf scale=-2:720 -c:v libx264 -crf 23 \
+    "$work/p720_crf23.mp4"
+ffmpeg -v error -y -i data/sample/sports2d-demo.mp4 -an -vf hflip -c:v libx265 -crf 26 \
+    -tag:v hvc1 -x265-params log-level=error "$work/mirror_hevc.mov"
+for v in original crf18 p720_crf23 mirror_hevc; do
     src=data/sample/sports2d-demo.mp4
     [ "$v" = crf18 ] && src=$work/crf18.mp4
+    [ "$v" = p720_crf23 ] && src=$work/p720_crf23.mp4
+    [ "$v" = mirror_hevc ] && src=$work/mirror_hevc.mov
     rm -rf "$work/$v"
     target/debug/gait run --input "$src" --out "$work/$v" --set report.overlay=false \
         --set report.pdf=false --set 'export.formats=[]' --no-progress
