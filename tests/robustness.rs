@@ -45,15 +45,21 @@ fn accepted(dir: &Path) -> Vec<(String, i64, i64)> {
 
 /// How many of `a`'s events have an event of the same side and kind in `b` within one frame,
 /// and how many of `b`'s have none in `a`.
-/// One numeric column of a run's cycle_quality.csv (NaN where empty).
-fn quality_column(dir: &Path, name: &str) -> Vec<f64> {
+/// One column of a run's cycle_quality.csv, as text.
+fn quality_text(dir: &Path, name: &str) -> Vec<String> {
     let table = std::fs::read_to_string(dir.join("cycle_quality.csv")).unwrap();
     let mut lines = table.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let at = header.iter().position(|h| *h == name).expect(name);
     lines
-        .map(|l| l.split(',').nth(at).unwrap().parse().unwrap_or(f64::NAN))
+        .map(|l| l.split(',').nth(at).unwrap().to_string())
         .collect()
+}
+
+/// One numeric column of a run's cycle_quality.csv (NaN where empty).
+fn quality_column(dir: &Path, name: &str) -> Vec<f64> {
+    let text = quality_text(dir, name);
+    text.iter().map(|v| v.parse().unwrap_or(f64::NAN)).collect()
 }
 
 fn agreement(a: &[(String, String, i64)], b: &[(String, String, i64)]) -> (usize, usize) {
@@ -375,7 +381,7 @@ fn judged_alike_and_back_without(dir: &Path, run: &Path, check_off: &str) {
     );
     let off = dir.join("off");
     run_ok(kin_on(run.join("keypoints.csv"), &off).args(["--set", check_off]));
-    assert!(!accepted(&off).is_empty());
+    assert!(accepted(&off).len() > accepted(run).len());
 }
 
 /// The sample as a phone indoors films it: a 1/30 s exposure (motion-interpolated to 120 fps,
@@ -383,7 +389,9 @@ fn judged_alike_and_back_without(dir: &Path, run: &Path, check_off: &str) {
 /// short), stored at CRF 23. The swinging feet are smeared to about half their standing
 /// contrast while the legs' blur reads sharp; before, its strides were accepted (the whole walk
 /// so filmed: mean curves 5.6 deg RMS off the original's, 8.3 at the worst joint) and nothing
-/// said.
+/// said. Now most strides are smeared and every smeared one is rejected; one stride lies at
+/// the threshold's edge (0.58-0.61 of the standing contrast, as the frames the collapse rule
+/// drops move its swing frames) and may be kept.
 #[test]
 fn a_long_exposure_s_motion_blur_is_named_and_its_strides_rejected() {
     let dir = tempfile::tempdir().unwrap();
@@ -394,7 +402,7 @@ fn a_long_exposure_s_motion_blur_is_named_and_its_strides_rejected() {
     let run = dir.path().join("run");
     let out = run_ok(&mut run_on(&video, &run));
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains(" motion_blurred"), "{stderr}");
+    assert!(stderr.contains("motion_blurred"), "{stderr}");
     let warnings = read_json(&run.join("run.json"))["warnings"].to_string();
     assert!(
         warnings.contains("feet are smeared by motion blur")
@@ -404,7 +412,17 @@ fn a_long_exposure_s_motion_blur_is_named_and_its_strides_rejected() {
     let kept = quality_column(&run, "swing_contrast");
     let smeared = kept.iter().filter(|c| **c < 0.6).count();
     assert!(smeared >= 3 && smeared * 2 > kept.len(), "{kept:?}");
-    assert!(accepted(&run).is_empty(), "{:?}", accepted(&run));
+    let taken = quality_text(&run, "accepted");
+    let kept_strides: Vec<f64> = kept
+        .iter()
+        .zip(&taken)
+        .filter(|(_, a)| a.as_str() == "true")
+        .map(|(c, _)| *c)
+        .collect();
+    assert!(
+        kept_strides.len() <= 1 && kept_strides.iter().all(|c| *c >= 0.6),
+        "{kept:?} {taken:?}"
+    );
 
     judged_alike_and_back_without(dir.path(), &run, "kinematics.cycle_min_swing_contrast=0");
 }
