@@ -20,6 +20,11 @@ const MAX_BYTES: u64 = 2 << 30;
 /// The share of the temporary folder's free space the kept frames may take (1 / this).
 const FREE_SHARE: u64 = 4;
 
+/// Frames stop being kept once the folder's free space falls under this share of what it was
+/// when they started (1 / this): runs side by side (a batch) each see the same free space at
+/// their start, and together they must not fill the disk the results are written to.
+const FLOOR_SHARE: u64 = 2;
+
 /// How long a later reader waits for the writer to hand over its frames (it only has to see
 /// its receiver dropped and finish the frame it was decoding).
 const HANDOVER_WAIT: Duration = Duration::from_secs(2);
@@ -130,7 +135,8 @@ impl FrameSpool {
         }
         *state = State::Off;
         let dir = std::env::temp_dir();
-        let budget = MAX_BYTES.min(free_bytes(&dir)? / FREE_SHARE);
+        let free = free_bytes(&dir)?;
+        let budget = MAX_BYTES.min(free / FREE_SHARE);
         if expected_frames.is_some_and(|n| (n * frame_len) as u64 > budget) {
             return None;
         }
@@ -142,6 +148,8 @@ impl FrameSpool {
             frame_len,
             frames: 0,
             budget,
+            dir,
+            floor: free / FLOOR_SHARE,
             ended: false,
             yuv,
         })
@@ -181,6 +189,9 @@ pub(crate) struct SpoolWriter {
     frame_len: usize,
     frames: usize,
     budget: u64,
+    /// The folder, and the free space under which nothing more is written there.
+    dir: std::path::PathBuf,
+    floor: u64,
     ended: bool,
     yuv: Yuv420,
 }
@@ -188,7 +199,9 @@ pub(crate) struct SpoolWriter {
 impl SpoolWriter {
     /// Keeps the next frame's yuv420p planes.
     pub(crate) fn push(&mut self, planes: &[u8]) {
-        let fits = ((self.frames + 1) * self.frame_len) as u64 <= self.budget;
+        let room = free_bytes(&self.dir)
+            .is_some_and(|f| f >= self.floor.saturating_add(planes.len() as u64));
+        let fits = room && ((self.frames + 1) * self.frame_len) as u64 <= self.budget;
         let written = fits
             && planes.len() == self.frame_len
             && self
@@ -229,5 +242,36 @@ impl Drop for SpoolWriter {
             };
         }
         self.spool.0.1.notify_all();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn writer(spool: &FrameSpool) -> SpoolWriter {
+        let yuv = Yuv420::of_stream(Some("yuv420p"), Some("bt709"), None, (4, 2)).unwrap();
+        spool.arm();
+        spool.writer(yuv, Yuv420::frame_len(4, 2), Some(2)).unwrap()
+    }
+
+    #[test]
+    fn frames_are_kept_until_the_disk_s_free_space_falls_to_its_floor() {
+        let spool = FrameSpool::default();
+        let mut w = writer(&spool);
+        w.push(&[16; 12]);
+        w.end();
+        drop(w);
+        let kept = spool.kept().expect("kept");
+        let (mut planes, mut out) = (Vec::new(), Vec::new());
+        assert!(kept.read(0, (4, 2), &mut planes, &mut out).unwrap() && kept.ended());
+        assert!(!kept.read(1, (4, 2), &mut planes, &mut out).unwrap());
+        // Free space under the floor (another run filled the disk): nothing is kept.
+        let spool = FrameSpool::default();
+        let mut w = writer(&spool);
+        w.floor = u64::MAX - 12;
+        w.push(&[16; 12]);
+        drop(w);
+        assert!(spool.kept().is_none());
     }
 }
