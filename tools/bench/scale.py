@@ -23,7 +23,7 @@ from variants import probe  # noqa: E402  (width, height, fps, frames) by ffprob
 
 
 def make_videos(work):
-    """The sample, its 4K copy and a 2-minute concatenation (16 copies), made once."""
+    """The sample, its 1080p and 4K copies and a 2-minute concatenation (16 copies), made once."""
     work.mkdir(parents=True, exist_ok=True)
     for name, height in [("1080p", 1080), ("4k", 2160)]:
         copy = work / f"{name}.mp4"

@@ -24,13 +24,37 @@ impl Threshold {
         self.past(v) > 0.0
     }
 
-    /// How far `v` lies past the threshold in its direction (negative: short of it).
     fn past(&self, v: f64) -> f64 {
-        match self.beyond {
-            "below" => self.value - v,
-            _ => v - self.value,
-        }
+        past(self.beyond, self.value, v)
     }
+}
+
+/// How far `v` lies past `threshold` in the direction `beyond` (negative: short of it).
+pub(crate) fn past(beyond: &str, threshold: f64, v: f64) -> f64 {
+    match beyond {
+        "below" => threshold - v,
+        _ => v - threshold,
+    }
+}
+
+/// Whether a mean `past` its threshold by that much, with standard error `se`, is present: past
+/// it by at least `se`. When it passed without that, why it is absent (`hits` of the `n` cycles
+/// past the threshold).
+pub(crate) fn consistent(
+    past: f64,
+    se: f64,
+    (hits, n): (usize, usize),
+    unit: &str,
+) -> (bool, String) {
+    let present = past > 0.0 && past >= se;
+    let reason = if past > 0.0 && !present {
+        format!(
+            "not consistent over the cycles: {hits} of {n} past the threshold, the mean past it by less than its standard error ({se:.2} {unit})"
+        )
+    } else {
+        String::new()
+    };
+    (present, reason)
 }
 
 /// Mean and sample SD (NaN for one value).
@@ -130,20 +154,11 @@ fn judged(
     } else {
         0.0
     };
-    let consistent = t.past(mean) >= se;
-    let reason = if t.passed(mean) && !consistent {
-        format!(
-            "not consistent over the cycles: {} of {} past the threshold, the mean past it by less than its standard error ({se:.2} {unit})",
-            hits.len(),
-            values.len()
-        )
-    } else {
-        String::new()
-    };
+    let (present, reason) = consistent(t.past(mean), se, (hits.len(), values.len()), unit);
     Verdict {
         item,
         side,
-        status: if t.passed(mean) && consistent {
+        status: if present {
             Status::Present
         } else {
             Status::Absent

@@ -55,26 +55,15 @@ pub fn pooled(verdicts: &[&Verdict]) -> Option<Verdict> {
     let groups: Vec<(f64, f64, usize)> = judged.iter().map(|v| (v.value, v.spread, v.n)).collect();
     let (mean, spread, n) = pool_groups(&groups)?;
     let first = judged[0];
-    let past = match first.beyond {
-        "below" => first.threshold - mean,
-        _ => mean - first.threshold,
-    };
+    let past = crate::judge::past(first.beyond, first.threshold, mean);
     let se = spread / (n as f64).sqrt();
-    let present = past > 0.0 && past >= se;
     let hits: usize = judged.iter().map(|v| v.cycles.len()).sum();
+    let (present, reason) = crate::judge::consistent(past, se, (hits, n), &first.unit);
     let links = judged
         .iter()
         .max_by_key(|v| v.cycles.len())
         .copied()
         .unwrap_or(first);
-    let reason = if past > 0.0 && !present {
-        format!(
-            "not consistent over the cycles: {hits} of {n} past the threshold, the mean past it by less than its standard error ({se:.2} {})",
-            first.unit
-        )
-    } else {
-        String::new()
-    };
     Some(Verdict {
         status: if present {
             Status::Present

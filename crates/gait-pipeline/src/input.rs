@@ -361,14 +361,14 @@ impl InputInfo {
 
     /// The next reader of every frame (the subject pass's) keeps them in a temporary file
     /// (frame_spool.rs), and the readers after it read them there instead of decoding again.
-    pub fn keep_frames(&self) {
+    pub(crate) fn keep_frames(&self) {
         if self.kind == Kind::Video {
             self.spool.arm();
         }
     }
 
     /// Frees the frames kept since [`Self::keep_frames`].
-    pub fn release_kept_frames(&self) {
+    pub(crate) fn release_kept_frames(&self) {
         self.spool.release();
     }
 

@@ -166,12 +166,7 @@ fn clip_as(
 
 /// Every frame's bytes, read through `info`'s reader, one after another.
 fn read_all(info: &InputInfo) -> Vec<u8> {
-    let mut frames = info.frames().unwrap();
-    let mut read = Vec::new();
-    while let Some(f) = frames.next_frame().unwrap() {
-        read.extend_from_slice(f.image.as_raw());
-    }
-    read
+    read_from(info, 0)
 }
 
 /// Every frame, read whole, against ffmpeg's rgb24 output of the whole video.
