@@ -1,29 +1,47 @@
-//! A front or back view filmed obliquely: its items are not judged.
+//! A walk filmed obliquely: the items its view cannot measure there are not judged.
 //!
-//! Beyond [`TOLERANCE_DEG`] between the walk and the camera's axis the frontal measures are
+//! Beyond [`TOLERANCE_DEG`] between the walk and the direction its view needs, the measures are
 //! distorted (BENCHMARKS.md, "Oblique walks"): on healthy and Parkinson's motion capture
-//! projected 20-45 deg off the walking line, circumduction, an abducted gait, hip hiking and
-//! whips were called where there were none. Such a run's front and back items are not
-//! assessable, with the angle as the reason, instead of present or absent.
+//! projected 20-45 deg off the walking line, a front or back view called circumduction, an
+//! abducted gait, hip hiking and whips where there were none; a side view 20 deg off across
+//! called an uneven step length on a healthy walk (its steps 64.7 and 53.2 cm: seen obliquely,
+//! each step is further away than the last, and the step width shows along the image's x,
+//! lengthening one side's steps and shortening the other's). Such a run's front and back items,
+//! or a side view's step length, are not assessable, with the angle as the reason, instead of
+//! present or absent. A side view's timing holds at any angle, its angles within a few degrees.
 
 use gait_kin::walk_angle::TOLERANCE_DEG;
 
 use crate::run_files::RunFiles;
+use crate::sagittal_items::STEP_LENGTH;
 use crate::verdict::{Status, Verdict};
 
-/// Turns the front and back items of `verdicts` into not assessable when `run` is a front or
-/// back view whose walk runs beyond the tolerance off the camera's axis.
+/// Turns the items of `verdicts` that `run`'s view cannot measure obliquely into not assessable
+/// when its walk runs beyond the tolerance off what the view needs: a front or back view's
+/// front and back items, a side view's step length.
 pub fn gate(verdicts: &mut [Verdict], run: &RunFiles) {
     let angle = run.walk_angle_deg;
-    if run.view == "sagittal" || angle.is_nan() || angle <= TOLERANCE_DEG {
+    let side_view = run.view == "sagittal";
+    let off = if side_view { 90.0 - angle } else { angle };
+    if angle.is_nan() || off <= TOLERANCE_DEG {
         return;
     }
-    let why = format!(
-        "the walk runs {angle:.0} deg off the camera's axis: a front or back view needs it within {TOLERANCE_DEG:.0} deg (film it straight toward or away from the camera)"
-    );
+    let why = if side_view {
+        format!(
+            "the walk runs {off:.0} deg off across the camera: step lengths need it within {TOLERANCE_DEG:.0} deg (film the walk straight across)"
+        )
+    } else {
+        format!(
+            "the walk runs {angle:.0} deg off the camera's axis: a front or back view needs it within {TOLERANCE_DEG:.0} deg (film it straight toward or away from the camera)"
+        )
+    };
+    let gated = |v: &Verdict| match side_view {
+        true => v.item.id == STEP_LENGTH.id,
+        false => v.item.view != "side",
+    };
     for v in verdicts
         .iter_mut()
-        .filter(|v| v.item.view != "side" && v.status != Status::NotAssessable)
+        .filter(|v| gated(v) && v.status != Status::NotAssessable)
     {
         *v = Verdict::not_assessable(v.item, v.side, why.clone());
     }
@@ -34,7 +52,7 @@ mod tests {
     use super::*;
     use crate::Side;
     use crate::frontal_items::CIRCUMDUCTION;
-    use crate::sagittal_items::STANCE;
+    use crate::sagittal_items::{STANCE, STEP_LENGTH};
 
     fn present(item: crate::verdict::Item) -> Verdict {
         let mut v = Verdict::not_assessable(item, Side::Right, "");
@@ -63,6 +81,24 @@ mod tests {
             "{}",
             v[0].reason
         );
+        assert_eq!(v[1].status, Status::Present);
+    }
+
+    /// A side view 20 deg off across: its step length is not judged, its timing is; at 10 deg
+    /// off both are.
+    #[test]
+    fn an_oblique_side_view_judges_no_step_length() {
+        let run = |angle| RunFiles {
+            view: "sagittal".into(),
+            walk_angle_deg: angle,
+            ..Default::default()
+        };
+        let mut v = vec![present(STEP_LENGTH), present(STANCE)];
+        gate(&mut v, &run(80.0));
+        assert_eq!(v[0].status, Status::Present);
+        gate(&mut v, &run(70.0));
+        assert_eq!(v[0].status, Status::NotAssessable);
+        assert!(v[0].reason.contains("20 deg off across"), "{}", v[0].reason);
         assert_eq!(v[1].status, Status::Present);
     }
 }

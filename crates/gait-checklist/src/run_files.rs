@@ -103,6 +103,22 @@ fn col(h: &[String], name: &str, file: &str) -> Result<usize, ChecklistError> {
         .ok_or_else(|| ChecklistError::Input(format!("{file}: no `{name}` column")))
 }
 
+/// The walk's angle to the camera's axis from a run's run.json (its kinematics' view decision)
+/// or a `gait kin` folder's kin.json; NaN where neither says (folders written before either
+/// did; a side view has no frontal_view.csv).
+fn manifest_walk_angle(dir: &Path) -> f64 {
+    let read = |file: &str, path: &[&str]| -> Option<f64> {
+        let text = std::fs::read_to_string(dir.join(file)).ok()?;
+        let json: serde_json::Value = serde_json::from_str(&text).ok()?;
+        path.iter()
+            .try_fold(&json, |v, key| v.get(key))?
+            .as_f64()
+    };
+    read("run.json", &["extra", "kinematics", "view", "walk_angle_deg"])
+        .or_else(|| read("kin.json", &["view", "walk_angle_deg"]))
+        .unwrap_or(f64::NAN)
+}
+
 fn num(s: &str) -> f64 {
     s.trim().parse().unwrap_or(f64::NAN)
 }
@@ -131,6 +147,9 @@ impl RunFiles {
                 r.view = v[c].clone();
                 r.walk_angle_deg = angle.map_or(f64::NAN, |a| num(&v[a]));
             }
+        }
+        if r.walk_angle_deg.is_nan() {
+            r.walk_angle_deg = manifest_walk_angle(dir);
         }
         r.strides = strides(dir)?;
         r.points = points(&dir.join("keypoints_filtered.csv"))?;

@@ -17,13 +17,14 @@ pub struct KinSource<'a> {
     pub tool: &'a str,
 }
 
-/// Writes `dir/kin.json` for `source` analysed with `config`, with the analysis' `warnings`
-/// (the report lists them, as it lists a run's from run.json).
+/// Writes `dir/kin.json` for `source` analysed with `config` into `result`: its warnings (the
+/// report lists them, as it lists a run's from run.json) and its view decision (the checklist
+/// reads the walk's angle there, as from a run's run.json).
 pub fn write_kin_manifest(
     dir: &Path,
     source: &KinSource,
     config: &PipelineConfig,
-    warnings: &[String],
+    result: &gait_kin::KinResult,
 ) -> Result<(), PipelineError> {
     let keypoints =
         std::fs::canonicalize(source.keypoints).unwrap_or(source.keypoints.to_path_buf());
@@ -33,7 +34,8 @@ pub fn write_kin_manifest(
         "fps": source.fps,
         "individual": source.individual,
         "config": config,
-        "warnings": warnings,
+        "warnings": result.warnings,
+        "view": result.view,
     });
     let path = dir.join("kin.json");
     let text = serde_json::to_string_pretty(&manifest)

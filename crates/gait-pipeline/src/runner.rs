@@ -529,7 +529,7 @@ pub fn kin_and_write(
     let result = gait_kin::analyse(seq, &config.postprocess, &config.kinematics)
         .map_err(gait_core::StageError::from)?;
     gait_kin::write_outputs(&result, out).map_err(gait_core::StageError::from)?;
-    crate::write_kin_manifest(out, source, config, &result.warnings)?;
+    crate::write_kin_manifest(out, source, config, &result)?;
     let outputs = crate::write_outputs(&crate::OutputOptions {
         dir: out,
         input: None,
