@@ -221,3 +221,38 @@ fn an_oblique_front_view_is_warned_and_not_judged() {
         );
     }
 }
+
+/// The Parkinson's walk seen from the side 30 deg off across (tests/data/oblique): its step
+/// lengths are not judged, with the angle as the reason (they read 29 and 46 cm there, 36 and
+/// 47 straight across: seen obliquely each step is further away than the last, and the step
+/// width shows along the image's x), while its timing is still judged.
+#[test]
+fn an_oblique_side_view_judges_no_step_length() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("kin");
+    let stderr = kin(
+        &fixture("oblique/gaitkit_pd_060"),
+        "150",
+        &out,
+        &["kinematics.frame_size=[1920, 1080]", "report.pdf=false"],
+    );
+    assert!(stderr.contains("deg off the camera's axis"), "{stderr}");
+    let list = std::fs::read_to_string(out.join("checklist.csv")).unwrap();
+    let rows = |item: &str| -> Vec<String> {
+        list.lines()
+            .filter(|l| l.starts_with(item))
+            .map(String::from)
+            .collect()
+    };
+    let steps = rows("uneven_step_length,");
+    assert_eq!(steps.len(), 2, "{list}");
+    for l in steps {
+        assert!(
+            l.contains(",not assessable,") && l.contains("deg off across the camera"),
+            "{l}"
+        );
+    }
+    for l in rows("uneven_stance_time,") {
+        assert!(!l.contains(",not assessable,"), "{l}");
+    }
+}

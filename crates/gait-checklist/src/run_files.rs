@@ -110,13 +110,14 @@ fn manifest_walk_angle(dir: &Path) -> f64 {
     let read = |file: &str, path: &[&str]| -> Option<f64> {
         let text = std::fs::read_to_string(dir.join(file)).ok()?;
         let json: serde_json::Value = serde_json::from_str(&text).ok()?;
-        path.iter()
-            .try_fold(&json, |v, key| v.get(key))?
-            .as_f64()
+        path.iter().try_fold(&json, |v, key| v.get(key))?.as_f64()
     };
-    read("run.json", &["extra", "kinematics", "view", "walk_angle_deg"])
-        .or_else(|| read("kin.json", &["view", "walk_angle_deg"]))
-        .unwrap_or(f64::NAN)
+    read(
+        "run.json",
+        &["extra", "kinematics", "view", "walk_angle_deg"],
+    )
+    .or_else(|| read("kin.json", &["view", "walk_angle_deg"]))
+    .unwrap_or(f64::NAN)
 }
 
 fn num(s: &str) -> f64 {
