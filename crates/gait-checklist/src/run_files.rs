@@ -44,9 +44,12 @@ pub struct FootLength {
 pub struct RunFiles {
     /// `sagittal`, `anterior` or `posterior`.
     pub view: String,
-    /// A front or back view's walk angle to the camera's axis (frontal_view.csv; NaN where not
-    /// known).
+    /// The walk's angle to the camera's axis (frontal_view.csv, else run.json or kin.json; NaN
+    /// where not known).
     pub walk_angle_deg: f64,
+    /// A front or back view's walking line beside the camera, in leg lengths (frontal_view.csv;
+    /// NaN where not known).
+    pub line_offset_leg: f64,
     pub strides: Vec<Stride>,
     /// cycles_all.csv: (side, joint, first frame) -> 101 values.
     pub sagittal: BTreeMap<(Side, String, usize), Vec<f64>>,
@@ -138,15 +141,18 @@ impl RunFiles {
         let mut r = RunFiles {
             view: "sagittal".into(),
             walk_angle_deg: f64::NAN,
+            line_offset_leg: f64::NAN,
             ..Default::default()
         };
         if let Some((h, rows)) = read(&dir.join("frontal_view.csv"))? {
             let c = col(&h, "view", "frontal_view.csv")?;
             // Run folders written before the walk's angle was estimated have no such column.
             let angle = h.iter().position(|x| x == "walk_angle_deg");
+            let offset = h.iter().position(|x| x == "line_offset_leg");
             if let Some(v) = rows.first() {
                 r.view = v[c].clone();
                 r.walk_angle_deg = angle.map_or(f64::NAN, |a| num(&v[a]));
+                r.line_offset_leg = offset.map_or(f64::NAN, |a| num(&v[a]));
             }
         }
         if r.walk_angle_deg.is_nan() {

@@ -118,6 +118,21 @@ impl Feet<'_> {
             .collect()
     }
 
+    /// How far beside the camera the walk's line runs: the pelvis' median lateral distance
+    /// from the line through the vanishing point, in leg lengths, over the frames `keep`
+    /// admits (NaN without any).
+    pub fn line_offset(&self, keep: &dyn Fn(usize) -> bool) -> f64 {
+        let mut at: Vec<f64> = (0..self.t.len())
+            .filter(|&i| keep(self.t.first_frame + i))
+            .filter_map(|i| {
+                let p = self.t.pelvis(i)?;
+                let leg = self.scale.leg_px(i);
+                Some((p.0 - self.vanishing_x).abs() / leg)
+            })
+            .collect();
+        median(&mut at)
+    }
+
     /// Where the ankle of `side` stood in the stance that starts at heel strike `hs`, in leg
     /// lengths, and the leg's image length at that depth; at the heel strike itself where the
     /// stance has no toe-off.

@@ -52,7 +52,17 @@ pub struct FrontalResult {
     /// Per candidate stride (in the order of cycle_quality): the measures it has no value for
     /// and why, `; `-separated (empty when complete or rejected).
     pub cycle_notes: Vec<String>,
+    /// How far beside the camera the walk's line runs, in leg lengths ([`LINE_OFFSET_LIMIT`]).
+    pub line_offset_leg: f64,
 }
+
+/// Beyond this many leg lengths (about 0.5 m) between the walk's line and the camera, a foot's
+/// sideways path is no longer measured at its own depth well enough: with the camera 0.5, 1.0
+/// and 1.5 m beside the line of a healthy walk (tools/frontal/oblique.py) the right foot's
+/// circumduction read 4.8, 6.1 and 7.5 cm against 2.7 in 3-D (the checklist's threshold is 5),
+/// and at 1.0 and 1.5 m walking away a medial or lateral whip was called. The checklist does not
+/// judge those items beyond it (`gait-checklist`'s camera gate), and the run warns.
+pub const LINE_OFFSET_LIMIT: f64 = 0.6;
 
 /// The inputs of [`measure`] besides the keypoints.
 pub struct Found<'a> {
@@ -107,6 +117,12 @@ pub fn measure(
     let mut lengths = feet.step_widths(&in_bout, kin);
     lengths.extend(feet.heel_offsets(&in_bout, kin));
     lengths.extend(feet.circumduction(f.accepted, kin));
+    let line_offset_leg = feet.line_offset(&in_bout);
+    if line_offset_leg > LINE_OFFSET_LIMIT {
+        warnings.push(format!(
+            "the walk's line runs about {line_offset_leg:.1} leg lengths beside the camera (more than {LINE_OFFSET_LIMIT}, about 0.5 m): circumduction and whips are not judged; put the camera on the walking line"
+        ));
+    }
     FrontalResult {
         view: f.view,
         leg_per_size: f.scale.leg_per_size,
@@ -116,6 +132,7 @@ pub fn measure(
         cycles: curves,
         feet: lengths,
         cycle_notes,
+        line_offset_leg,
     }
 }
 

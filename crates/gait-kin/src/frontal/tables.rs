@@ -18,7 +18,7 @@ pub fn all(
     fps: f64,
 ) -> Vec<(&'static str, Table)> {
     vec![
-        ("frontal_view.csv", view(v)),
+        ("frontal_view.csv", view(v, f.line_offset_leg)),
         ("frontal_angles.csv", angles(f, first_frame, fps)),
         ("frontal_cycles.csv", cycles(f)),
         ("frontal_scalars.csv", scalars(f)),
@@ -26,9 +26,9 @@ pub fn all(
     ]
 }
 
-/// One row: the view analysed and how it was decided (also in run.json, which `gait kin`
-/// does not write).
-fn view(v: &ViewDecision) -> Table {
+/// One row: the view analysed and how it was decided (also in run.json), and how far beside
+/// the camera the walk's line runs.
+fn view(v: &ViewDecision, line_offset_leg: f64) -> Table {
     Table::default()
         .with("view", texts([crate::frontal::view_name(v.view)]))
         .with("declared", texts([v.declared.name()]))
@@ -36,6 +36,7 @@ fn view(v: &ViewDecision) -> Table {
         .with("frontal_share", nums([v.frontal_share]))
         .with("growth", nums([v.growth]))
         .with("walk_angle_deg", nums([v.walk_angle_deg]))
+        .with("line_offset_leg", nums([line_offset_leg]))
 }
 
 fn angles(f: &FrontalResult, first_frame: usize, fps: f64) -> Table {
