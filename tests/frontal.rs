@@ -256,3 +256,32 @@ fn an_oblique_side_view_judges_no_step_length() {
         assert!(!l.contains(",not assessable,"), "{l}");
     }
 }
+
+/// The Parkinson's walk toward a camera 1 m beside its line (tests/data/oblique): the run warns
+/// that the line runs beside the camera, and circumduction is not judged (whips need a back
+/// view), while the trunk's lean still is.
+#[test]
+fn a_walking_line_beside_the_camera_is_warned_and_its_sideways_path_not_judged() {
+    let work = tempfile::tempdir().unwrap();
+    let out = work.path().join("kin");
+    let stderr = kin(
+        &fixture("oblique/gaitkit_pd_000_beside1000"),
+        "150",
+        &out,
+        &["kinematics.frame_size=[1920, 1080]", "report.pdf=false"],
+    );
+    assert!(stderr.contains("leg lengths beside the camera"), "{stderr}");
+    let list = std::fs::read_to_string(out.join("checklist.csv")).unwrap();
+    let rows = |item: &str| -> Vec<&str> { list.lines().filter(|l| l.starts_with(item)).collect() };
+    let path = rows("circumduction,");
+    assert_eq!(path.len(), 2, "{list}");
+    for l in path {
+        assert!(
+            l.contains(",not assessable,") && l.contains("beside the camera"),
+            "{l}"
+        );
+    }
+    for l in rows("lateral_trunk") {
+        assert!(!l.contains("beside the camera"), "{l}");
+    }
+}
