@@ -179,41 +179,57 @@ fn a_real_front_view_the_man_on_the_box() {
     assert!(worst <= 5.0, "pelvic obliquity up to {worst:.1} deg");
 }
 
+/// `gait kin` on the projection `name` of tests/data/oblique (150 Hz, the frame size given):
+/// its stderr, checklist.csv and report.html.
+struct Oblique {
+    stderr: String,
+    checklist: String,
+    report: String,
+}
+
+impl Oblique {
+    fn run(name: &str) -> Self {
+        let work = tempfile::tempdir().unwrap();
+        let out = work.path().join("kin");
+        let stderr = kin(
+            &fixture(&format!("oblique/{name}")),
+            "150",
+            &out,
+            &["kinematics.frame_size=[1920, 1080]", "report.pdf=false"],
+        );
+        let read = |f: &str| std::fs::read_to_string(out.join(f)).unwrap();
+        Self {
+            checklist: read("checklist.csv"),
+            report: read("report.html"),
+            stderr,
+        }
+    }
+
+    /// The checklist rows of the items whose id starts with one of `items`.
+    fn rows(&self, items: &[&str]) -> Vec<&str> {
+        (self.checklist.lines())
+            .filter(|l| items.iter().any(|i| l.starts_with(i)))
+            .collect()
+    }
+}
+
 /// A walk filmed 28 deg off the camera's axis (tests/data/oblique, the Parkinson's walk toward
 /// a turned camera): `gait kin` warns with the angle, the report lists the warning, and the
 /// checklist judges none of its front items (at the pelvis' scale it called a circumduction
 /// that the walk does not have) but says why.
 #[test]
 fn an_oblique_front_view_is_warned_and_not_judged() {
-    let work = tempfile::tempdir().unwrap();
-    let out = work.path().join("kin");
-    let stderr = kin(
-        &fixture("oblique/gaitkit_pd_030"),
-        "150",
-        &out,
-        &["kinematics.frame_size=[1920, 1080]", "report.pdf=false"],
-    );
-    assert!(
-        stderr.contains("the walk runs about 28 deg off"),
-        "{stderr}"
-    );
-    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
-    assert!(report.contains("the walk runs about 28 deg off"));
-    let list = std::fs::read_to_string(out.join("checklist.csv")).unwrap();
-    let front: Vec<&str> = list
-        .lines()
-        .filter(|l| {
-            [
-                "lateral_trunk",
-                "hip_hiking",
-                "abducted_gait",
-                "circumduction",
-            ]
-            .iter()
-            .any(|i| l.starts_with(i))
-        })
-        .collect();
-    assert_eq!(front.len(), 8, "{list}");
+    let run = Oblique::run("gaitkit_pd_030");
+    let warned = "the walk runs about 28 deg off";
+    assert!(run.stderr.contains(warned), "{}", run.stderr);
+    assert!(run.report.contains(warned));
+    let front = run.rows(&[
+        "lateral_trunk",
+        "hip_hiking",
+        "abducted_gait",
+        "circumduction",
+    ]);
+    assert_eq!(front.len(), 8, "{}", run.checklist);
     for l in front {
         assert!(
             l.contains(",not assessable,") && l.contains("28 deg off the camera's axis"),
@@ -228,31 +244,21 @@ fn an_oblique_front_view_is_warned_and_not_judged() {
 /// width shows along the image's x), while its timing is still judged.
 #[test]
 fn an_oblique_side_view_judges_no_step_length() {
-    let work = tempfile::tempdir().unwrap();
-    let out = work.path().join("kin");
-    let stderr = kin(
-        &fixture("oblique/gaitkit_pd_060"),
-        "150",
-        &out,
-        &["kinematics.frame_size=[1920, 1080]", "report.pdf=false"],
+    let run = Oblique::run("gaitkit_pd_060");
+    assert!(
+        run.stderr.contains("deg off the camera's axis"),
+        "{}",
+        run.stderr
     );
-    assert!(stderr.contains("deg off the camera's axis"), "{stderr}");
-    let list = std::fs::read_to_string(out.join("checklist.csv")).unwrap();
-    let rows = |item: &str| -> Vec<String> {
-        list.lines()
-            .filter(|l| l.starts_with(item))
-            .map(String::from)
-            .collect()
-    };
-    let steps = rows("uneven_step_length,");
-    assert_eq!(steps.len(), 2, "{list}");
+    let steps = run.rows(&["uneven_step_length,"]);
+    assert_eq!(steps.len(), 2, "{}", run.checklist);
     for l in steps {
         assert!(
             l.contains(",not assessable,") && l.contains("deg off across the camera"),
             "{l}"
         );
     }
-    for l in rows("uneven_stance_time,") {
+    for l in run.rows(&["uneven_stance_time,"]) {
         assert!(!l.contains(",not assessable,"), "{l}");
     }
 }
@@ -262,26 +268,19 @@ fn an_oblique_side_view_judges_no_step_length() {
 /// view), while the trunk's lean still is.
 #[test]
 fn a_walking_line_beside_the_camera_is_warned_and_its_sideways_path_not_judged() {
-    let work = tempfile::tempdir().unwrap();
-    let out = work.path().join("kin");
-    let stderr = kin(
-        &fixture("oblique/gaitkit_pd_000_beside1000"),
-        "150",
-        &out,
-        &["kinematics.frame_size=[1920, 1080]", "report.pdf=false"],
-    );
-    assert!(stderr.contains("leg lengths beside the camera"), "{stderr}");
-    let list = std::fs::read_to_string(out.join("checklist.csv")).unwrap();
-    let rows = |item: &str| -> Vec<&str> { list.lines().filter(|l| l.starts_with(item)).collect() };
-    let path = rows("circumduction,");
-    assert_eq!(path.len(), 2, "{list}");
+    let run = Oblique::run("gaitkit_pd_000_beside1000");
+    let beside = "leg lengths beside the camera";
+    assert!(run.stderr.contains(beside), "{}", run.stderr);
+    assert!(run.report.contains(beside));
+    let path = run.rows(&["circumduction,"]);
+    assert_eq!(path.len(), 2, "{}", run.checklist);
     for l in path {
         assert!(
             l.contains(",not assessable,") && l.contains("beside the camera"),
             "{l}"
         );
     }
-    for l in rows("lateral_trunk") {
+    for l in run.rows(&["lateral_trunk"]) {
         assert!(!l.contains("beside the camera"), "{l}");
     }
 }
