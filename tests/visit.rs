@@ -468,10 +468,12 @@ fn noisy_copy(case: &Path, to: &Path, seed: u64) {
 }
 
 /// The larger planted deviations as 30 fps videos with pose-model jitter (3 seeds): each is found
-/// on the right in every seed (a 10 % shorter stance and the whip in 2 of 3) and nothing on the
-/// left; circumduction only where it is planted (it was called in 3 of the other 57 visits before
-/// its chord ran from stance to stance over the swing alone); what else the jitter adds on the
-/// right is printed (BENCHMARKS.md).
+/// on the right in every seed and nothing on the left; circumduction only where it is planted (it
+/// was called in 3 of the other 57 visits before its chord ran from stance to stance over the
+/// swing alone); what else the jitter adds on the right is printed (BENCHMARKS.md). The 10 %
+/// shorter stance was found in 2 of 3 seeds until a side view's hips drifting apart for two
+/// frames stopped being taken as a front view (direction.rs): that lost a heel strike, a stride
+/// and half the healthy walk's stance figures in the third seed.
 #[test]
 fn planted_deviations_under_pose_model_noise() {
     let data = planted();
@@ -507,7 +509,7 @@ fn planted_deviations_under_pose_model_noise() {
                     "{trial} {case} seed {}: circumduction called in {f:?}",
                     seed + 1
                 );
-                if !["none", "short_stance_10", "medial_whip_8"].contains(&case) {
+                if case != "none" {
                     let item = format!("{} (right)", item_of(case));
                     assert!(
                         f.contains(&item),
@@ -515,17 +517,6 @@ fn planted_deviations_under_pose_model_noise() {
                         seed + 1
                     );
                 }
-            }
-            // A stance 10 % shorter is 2 frames at 30 fps, over the 2-3 strides a side of these
-            // trials; with the jitter the swing:stance ratio of the unmodified walk already
-            // spreads over 0.93-1.08 (BENCHMARKS.md): found in 2 of 3 seeds is what holds.
-            // A whip lives in the 6-7 frames (at 30 fps) around a toe-off that is itself found on
-            // jittered keypoints, and is measured against the heel's median at foot flat: the
-            // Parkinson's walker's 8 cm whip was found in 2 of 3 seeds (Fukuchi 3 of 3).
-            if case == "short_stance_10" || case == "medial_whip_8" {
-                let item = format!("{} (right)", item_of(case));
-                let seen = found.iter().filter(|f| f.contains(&item)).count();
-                assert!(seen >= 2, "{trial} {case}: {item} in {seen} of 3 seeds");
             }
         }
     }
