@@ -13,7 +13,7 @@
 //! not judge circumduction and whips, the items that follow a foot's sideways path.
 
 use gait_kin::frontal::LINE_OFFSET_LIMIT;
-use gait_kin::walk_angle::TOLERANCE_DEG;
+use gait_kin::walk_angle::{TOLERANCE_DEG, degrees_off};
 
 use crate::frontal_items::CIRCUMDUCTION;
 use crate::run_files::RunFiles;
@@ -39,18 +39,18 @@ fn gate_line_offset(verdicts: &mut [Verdict], run: &RunFiles) {
     let why = format!(
         "the walk's line runs {offset:.1} leg lengths beside the camera: a foot's sideways path needs it within {LINE_OFFSET_LIMIT} (about 0.5 m; put the camera on the walking line)"
     );
-    for v in verdicts.iter_mut().filter(|v| {
-        [CIRCUMDUCTION.id, WHIP.id].contains(&v.item.id) && v.status != Status::NotAssessable
-    }) {
-        *v = Verdict::not_assessable(v.item, v.side, why.clone());
-    }
+    not_assessable(
+        verdicts,
+        |v| [CIRCUMDUCTION.id, WHIP.id].contains(&v.item.id),
+        &why,
+    );
 }
 
 /// The items of a view filmed beyond [`TOLERANCE_DEG`] off the direction it needs.
 fn gate_angle(verdicts: &mut [Verdict], run: &RunFiles) {
     let angle = run.walk_angle_deg;
     let side_view = run.view == "sagittal";
-    let off = if side_view { 90.0 - angle } else { angle };
+    let off = degrees_off(!side_view, angle);
     if angle.is_nan() || off <= TOLERANCE_DEG {
         return;
     }
@@ -67,11 +67,16 @@ fn gate_angle(verdicts: &mut [Verdict], run: &RunFiles) {
         true => v.item.id == STEP_LENGTH.id,
         false => v.item.view != "side",
     };
+    not_assessable(verdicts, gated, &why);
+}
+
+/// The judged verdicts that `gated` picks turned into not assessable, `why`.
+fn not_assessable(verdicts: &mut [Verdict], gated: impl Fn(&Verdict) -> bool, why: &str) {
     for v in verdicts
         .iter_mut()
         .filter(|v| gated(v) && v.status != Status::NotAssessable)
     {
-        *v = Verdict::not_assessable(v.item, v.side, why.clone());
+        *v = Verdict::not_assessable(v.item, v.side, why);
     }
 }
 

@@ -95,18 +95,22 @@ pub fn warning(view: View, angle: f64) -> Option<String> {
     if !angle.is_finite() {
         return None;
     }
-    let (off, what) = match view {
-        View::Sagittal => (90.0 - angle, "across the camera (a side view)"),
-        _ => (
-            angle,
-            "straight toward or away from the camera (a front or back view)",
-        ),
+    let off = degrees_off(view.is_frontal(), angle);
+    let what = match view {
+        View::Sagittal => "across the camera (a side view)",
+        _ => "straight toward or away from the camera (a front or back view)",
     };
     (off > TOLERANCE_DEG).then(|| {
         format!(
             "the walk runs about {angle:.0} deg off the camera's axis (estimated from the body's image size along its path, for a phone's {FIELD_OF_VIEW_DEG:.0} deg field of view), {off:.0} deg from {what}: beyond {TOLERANCE_DEG:.0} deg the angles are distorted (BENCHMARKS.md, \"Oblique walks\"); film the walk straight across, toward or away from the camera"
         )
     })
+}
+
+/// Degrees between a walk at `angle` to the camera's axis and what its view needs: straight
+/// toward or away for a front or back view (`frontal`), across for a side view.
+pub fn degrees_off(frontal: bool, angle: f64) -> f64 {
+    if frontal { angle } else { 90.0 - angle }
 }
 
 #[cfg(test)]
