@@ -175,6 +175,7 @@ fn judged(
         frames: hits.iter().map(|s| s.frame).collect(),
         reason,
         run: String::new(),
+        judged: None,
     }
 }
 

@@ -52,8 +52,14 @@ pub fn pooled(verdicts: &[&Verdict]) -> Option<Verdict> {
     if judged.len() < 2 {
         return None;
     }
-    let groups: Vec<(f64, f64, usize)> = judged.iter().map(|v| (v.value, v.spread, v.n)).collect();
+    let on = |v: &Verdict| v.judged.unwrap_or(v.value);
+    let groups: Vec<(f64, f64, usize)> = judged.iter().map(|v| (on(v), v.spread, v.n)).collect();
     let (mean, spread, n) = pool_groups(&groups)?;
+    // A signed value judged on its size (the whip) is reported as the signed values' mean.
+    let signed = judged.iter().any(|v| v.judged.is_some()).then(|| {
+        let w: f64 = judged.iter().map(|v| v.value * v.n as f64).sum();
+        w / n as f64
+    });
     let first = judged[0];
     let past = crate::judge::past(first.beyond, first.threshold, mean);
     let se = spread / (n as f64).sqrt();
@@ -70,7 +76,8 @@ pub fn pooled(verdicts: &[&Verdict]) -> Option<Verdict> {
         } else {
             Status::Absent
         },
-        value: mean,
+        value: signed.unwrap_or(mean),
+        judged: signed.map(|_| mean),
         spread,
         n,
         cycles: links.cycles.clone(),

@@ -69,6 +69,10 @@ pub struct Verdict {
     pub reason: String,
     /// The run folder the frames are in (`gait review RUN --frame N` opens one).
     pub run: String,
+    /// The mean the threshold was applied to where it is not `value`: an item judged on sizes
+    /// whose reported value keeps its sign (the whip: lateral +, medial -). Passes pool on it.
+    #[serde(skip)]
+    pub judged: Option<f64>,
 }
 
 impl Verdict {
@@ -90,6 +94,7 @@ impl Verdict {
             frames: Vec::new(),
             reason: reason.into(),
             run: String::new(),
+            judged: None,
         }
     }
 }

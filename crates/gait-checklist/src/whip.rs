@@ -75,6 +75,7 @@ pub fn assess(run: &RunFiles, cfg: &ChecklistConfig) -> [Verdict; 2] {
         let mut v = judge(WHIP, side, &abs, t, "% leg", none);
         // The reported value keeps its sign: lateral (+) or medial (-).
         if !samples.is_empty() {
+            v.judged = Some(v.value);
             v.value = samples.iter().map(|s| s.value).sum::<f64>() / samples.len() as f64;
         }
         v

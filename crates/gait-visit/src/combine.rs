@@ -211,6 +211,10 @@ pub fn checklist(
                 })
         };
         if let Some((p, v)) = chosen {
+            if let Some(pooled) = pooled_over_like_passes(per_pass, p, &v) {
+                out.push(pooled);
+                continue;
+            }
             let from = match (v.status, v.item.paired) {
                 (Status::NotAssessable, _) => String::new(),
                 (_, true) => format!("{}, both sides", p.label()),
@@ -249,6 +253,45 @@ fn pooled_over_side_views(
         v,
         format!("{}, both sides, cycles pooled", labels.join(" + ")),
     ))
+}
+
+/// The judged verdict `v` of pass `p` pooled with the same item's verdicts from the passes that
+/// see that side as `p` does: the side views with the limb as near the camera, or the passes of
+/// the same front or back view. A clinic films several short passes of one view, each with a
+/// stride or two a side, and one stride's foot items are not reliable under the pose model's
+/// jitter (BENCHMARKS.md, "Visit and checklist"). Items that weigh one side against the other
+/// keep one judgement; `None` where no other pass judges it alike.
+fn pooled_over_like_passes(
+    per_pass: &[(&Pass, Vec<Verdict>)],
+    p: &Pass,
+    v: &Verdict,
+) -> Option<(Verdict, String)> {
+    if v.item.paired || v.status == Status::NotAssessable {
+        return None;
+    }
+    let side = v.side.name();
+    let alike = |q: &Pass| {
+        if v.item.view == "side" {
+            !q.is_frontal() && q.near_camera(side) == p.near_camera(side)
+        } else {
+            q.view == p.view
+        }
+    };
+    // In the passes' order, `v` itself among them.
+    let like: Vec<(&Pass, &Verdict)> = (per_pass.iter())
+        .filter(|(q, _)| alike(q))
+        .filter_map(|(q, vs)| {
+            let w = vs
+                .iter()
+                .find(|w| w.item.id == v.item.id && w.side == v.side)?;
+            let same_scale = w.unit == v.unit && w.threshold == v.threshold;
+            (w.status != Status::NotAssessable && same_scale).then_some((*q, w))
+        })
+        .collect();
+    let verdicts: Vec<&Verdict> = like.iter().map(|(_, w)| *w).collect();
+    let pooled = gait_checklist::pooled(&verdicts)?;
+    let labels: Vec<String> = like.iter().map(|(q, _)| q.label()).collect();
+    Some((pooled, format!("{}, cycles pooled", labels.join(" + "))))
 }
 
 /// How well a pass judges the paired item `id`: on both sides, from the `preferred` side's
@@ -361,6 +404,67 @@ mod tests {
                 ),
             ]
         );
+    }
+
+    const WHIP: Item = Item {
+        id: "medial_lateral_whip",
+        name: "Medial or lateral whip",
+        measure: "",
+        unit: "% leg",
+        view: "back",
+        amputation: "both",
+        paired: false,
+    };
+
+    /// A pass's right whip from one stride of `signed` % leg (judged on its size, 5 % leg).
+    fn whip(signed: f64) -> Vec<Verdict> {
+        let mut v = Verdict::not_assessable(WHIP, Side::Right, "");
+        v.status = if signed.abs() > 5.0 {
+            Status::Present
+        } else {
+            Status::Absent
+        };
+        (v.value, v.judged, v.n, v.threshold) = (signed, Some(signed.abs()), 1, 5.0);
+        vec![v]
+    }
+
+    /// Three passes from behind, one stride each: the one whose stride read past the threshold
+    /// no longer decides alone; the strides are judged together (a side view cannot judge it).
+    #[test]
+    fn the_passes_of_one_view_pool_their_strides() {
+        let back = [1, 2, 3].map(|k| {
+            let mut p = pass("posterior", 1, 1);
+            p.video = PathBuf::from(format!("back{k}.mp4"));
+            p
+        });
+        let side = pass("left", 2, 2);
+        let per_pass = vec![
+            (&back[0], whip(6.5)),
+            (&back[1], whip(-2.0)),
+            (&back[2], whip(3.0)),
+            (
+                &side,
+                vec![Verdict::not_assessable(
+                    WHIP,
+                    Side::Right,
+                    "needs a back view",
+                )],
+            ),
+        ];
+        let got = checklist(&per_pass, (&[], ""), Side::Right);
+        let (v, from) = &got[0];
+        assert_eq!(v.status, Status::Absent, "{v:?}");
+        assert_eq!(v.n, 3);
+        assert!((v.value - 2.5).abs() < 1e-12, "{v:?}");
+        assert!((v.judged.unwrap() - 11.5 / 3.0).abs() < 1e-12, "{v:?}");
+        assert_eq!(
+            from,
+            "posterior view (back1.mp4) + posterior view (back2.mp4) + posterior view (back3.mp4), cycles pooled"
+        );
+        // A whip in every stride is found, with its sign.
+        let per_pass = vec![(&back[0], whip(-9.0)), (&back[1], whip(-7.0))];
+        let (v, _) = &checklist(&per_pass, (&[], ""), Side::Right)[0];
+        assert_eq!((v.status, v.value, v.n), (Status::Present, -8.0, 2));
     }
 
     /// The timing items are judged on the side views' pooled timing when it judges them.
