@@ -1,10 +1,8 @@
-//! How the passes of a visit are combined: each side's sagittal curves from the side view where
-//! that limb is near the camera, the frontal curves from the front or back view with the most
-//! cycles, the timing pooled over every pass, and each checklist item from the pass that can
-//! judge it best.
+//! How the passes of a visit are combined (the curves: curves.rs): the timing pooled over every
+//! pass, and each checklist item from the pass that can judge it best, its cycles pooled over
+//! the passes that see it alike.
 
 use gait_checklist::{Status, Verdict};
-use gait_eval::plot::CycleCurve;
 use gait_report::spatiotemporal::StParam;
 
 use crate::pass::Pass;
@@ -17,79 +15,6 @@ pub struct Source {
 }
 
 const SIDES: [&str; 2] = ["left", "right"];
-
-/// Each side's sagittal curves: from a side view where that limb was near the camera (its own
-/// side's view, or a walk there and back), else from one where it was far (half hidden), said so.
-pub fn sagittal(passes: &[Pass], sources: &mut Vec<Source>) -> Vec<CycleCurve> {
-    let mut out = Vec::new();
-    for side in SIDES {
-        let best = |near: bool| {
-            passes
-                .iter()
-                .filter(|p| {
-                    !p.is_frontal() && p.near_camera(side) == near && p.cycles(side, false) > 0
-                })
-                .max_by_key(|p| p.cycles(side, false))
-        };
-        let (pass, how) = match (best(true), best(false)) {
-            (Some(p), _) => (p, "near the camera"),
-            (None, Some(p)) => (p, "far from the camera: no pass shows it near"),
-            (None, None) => {
-                sources.push(Source {
-                    what: format!("{side} sagittal curves"),
-                    pass: "none: no side view with an accepted cycle of this limb".into(),
-                });
-                continue;
-            }
-        };
-        out.extend(
-            pass.sagittal
-                .iter()
-                .filter(|c| c.side.as_str() == side)
-                .cloned(),
-        );
-        sources.push(Source {
-            what: format!("{side} sagittal curves"),
-            pass: format!(
-                "{} ({how}), {} cycles",
-                pass.label(),
-                pass.cycles(side, false)
-            ),
-        });
-    }
-    out
-}
-
-/// Each side's frontal curves from the front or back pass with the most of its cycles.
-pub fn frontal(passes: &[Pass], sources: &mut Vec<Source>) -> (Vec<CycleCurve>, Option<String>) {
-    let mut out = Vec::new();
-    let mut view = None;
-    for side in SIDES {
-        let best = passes
-            .iter()
-            .filter(|p| p.is_frontal() && p.cycles(side, true) > 0)
-            .max_by_key(|p| p.cycles(side, true));
-        let Some(p) = best else {
-            sources.push(Source {
-                what: format!("{side} frontal curves"),
-                pass: "none: no front or back view with an accepted cycle of this side".into(),
-            });
-            continue;
-        };
-        view.get_or_insert_with(|| p.view.clone());
-        out.extend(
-            p.frontal
-                .iter()
-                .filter(|c| c.side.as_str() == side)
-                .cloned(),
-        );
-        sources.push(Source {
-            what: format!("{side} frontal curves"),
-            pass: format!("{}, {} cycles", p.label(), p.cycles(side, true)),
-        });
-    }
-    (out, view)
-}
 
 /// Timing (stride and step time, stance, cadence) pooled over every pass where it was measured:
 /// means weighted by their counts, SDs pooled; the symmetry index from the pooled sides.
@@ -317,6 +242,7 @@ mod tests {
     use std::path::PathBuf;
 
     use gait_checklist::{ChecklistConfig, Item, Param, Side};
+    use gait_eval::plot::CycleCurve;
 
     use super::*;
 

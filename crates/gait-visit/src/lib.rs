@@ -5,6 +5,7 @@
 //! the gait-deviation checklist with each item from the pass that can judge it.
 
 mod combine;
+mod curves;
 mod outcomes;
 mod pass;
 pub mod progress;
@@ -60,8 +61,8 @@ pub struct VisitSummary {
 /// visit_cycles.csv and visit_spatiotemporal.csv.
 pub fn write(out: &Path, passes: &[Pass], o: &VisitOptions) -> Result<VisitSummary, VisitError> {
     let mut sources = Vec::new();
-    let sagittal = combine::sagittal(passes, &mut sources);
-    let (frontal, frontal_view) = combine::frontal(passes, &mut sources);
+    let sagittal = curves::sagittal(passes, &mut sources);
+    let (frontal, frontal_view) = curves::frontal(passes, &mut sources);
     let spatiotemporal = combine::spatiotemporal(passes);
     let checklist = judge_each(passes, o)?;
     tables::write_all(out, &checklist, &sagittal, &frontal, &spatiotemporal)?;
