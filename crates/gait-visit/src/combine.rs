@@ -265,19 +265,11 @@ mod tests {
             sd: vec![0.0],
             n_cycles: n,
         };
-        Pass {
-            view: view.into(),
-            video: PathBuf::from(format!("{view}.mp4")),
-            dir: PathBuf::new(),
-            sagittal: vec![curve("left", left), curve("right", right)],
-            frontal: Vec::new(),
-            spatiotemporal: Vec::new(),
-            status: "done".into(),
-            fps: Some(30.0),
-            warnings: Vec::new(),
-            near: Vec::new(),
-            image: None,
-        }
+        Pass::with_curves(
+            view,
+            &format!("{view}.mp4"),
+            vec![curve("left", left), curve("right", right)],
+        )
     }
 
     /// (side, status, source) of each verdict.

@@ -141,32 +141,19 @@ fn pool_two(a: &CycleCurve, b: &CycleCurve) -> CycleCurve {
 
 #[cfg(test)]
 mod tests {
-    use std::path::PathBuf;
-
     use super::*;
 
     /// A side view with `n` left knee cycles of mean `mean` (SD 1) at every point.
     fn pass(view: &str, video: &str, n: usize, mean: f64) -> Pass {
-        Pass {
-            view: view.into(),
-            video: PathBuf::from(video),
-            dir: PathBuf::new(),
-            sagittal: vec![CycleCurve {
-                side: "left".parse().unwrap(),
-                joint: "knee".into(),
-                percent: vec![0.0, 50.0, 100.0],
-                mean: vec![mean; 3],
-                sd: vec![if n > 1 { 1.0 } else { f64::NAN }; 3],
-                n_cycles: n,
-            }],
-            frontal: Vec::new(),
-            spatiotemporal: Vec::new(),
-            status: "done".into(),
-            fps: Some(30.0),
-            warnings: Vec::new(),
-            near: Vec::new(),
-            image: None,
-        }
+        let knee = CycleCurve {
+            side: "left".parse().unwrap(),
+            joint: "knee".into(),
+            percent: vec![0.0, 50.0, 100.0],
+            mean: vec![mean; 3],
+            sd: vec![if n > 1 { 1.0 } else { f64::NAN }; 3],
+            n_cycles: n,
+        };
+        Pass::with_curves(view, video, vec![knee])
     }
 
     /// Two passes from the left: the left knee's cycles of both, weighted by their counts; the

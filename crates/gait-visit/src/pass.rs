@@ -110,6 +110,24 @@ impl Pass {
         format!("{} view ({name})", self.view)
     }
 
+    /// A pass of `view` from `video` with these sagittal curves and nothing else, for tests.
+    #[cfg(test)]
+    pub(crate) fn with_curves(view: &str, video: &str, sagittal: Vec<CycleCurve>) -> Self {
+        Self {
+            view: view.into(),
+            video: PathBuf::from(video),
+            dir: PathBuf::new(),
+            sagittal,
+            frontal: Vec::new(),
+            spatiotemporal: Vec::new(),
+            status: "done".into(),
+            fps: Some(30.0),
+            warnings: Vec::new(),
+            near: Vec::new(),
+            image: None,
+        }
+    }
+
     /// Accepted cycles of a side in this pass (the curves' largest n).
     pub fn cycles(&self, side: &str, frontal: bool) -> usize {
         let curves = if frontal {
