@@ -181,10 +181,14 @@ impl Checklist {
             })
             .collect();
         let from = sources.map_or(String::new(), |s| {
-            let names: Vec<String> = pair
-                .iter()
-                .filter_map(|(i, v)| Some(format!("{}: {}", v.side.name(), s.get(*i)?)))
+            let of: Vec<(&str, &String)> = (pair.iter())
+                .filter_map(|(i, v)| Some((v.side.name(), s.get(*i)?)))
                 .collect();
+            // A judgement of both sides (a paired item, the pooled timing) is named once.
+            let names: Vec<String> = match of.as_slice() {
+                [(_, a), (_, b)] if a == b => vec![a.to_string()],
+                _ => of.iter().map(|(side, f)| format!("{side}: {f}")).collect(),
+            };
             format!("<td>{}</td>", escape(&names.join("; ")))
         });
         format!(
