@@ -13,7 +13,7 @@ pub struct Args {
     /// Output folder: the visit report, and each pass's run under passes/
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// A pass filmed from the subject's left side (repeatable)
+    /// A pass filmed from the subject's left side (repeatable: the passes of a view are pooled)
     #[arg(long, value_name = "VIDEO")]
     left: Vec<PathBuf>,
     /// A pass filmed from the subject's right side (repeatable)
